@@ -1,0 +1,3 @@
+//! glint: a teaching-grade, production-fast CPU ray tracer.
+pub mod math;
+pub mod scene;

@@ -1,0 +1,84 @@
+//! The format-independent description of a scene: what a parser produces and
+//! what tests build by hand. Nothing here knows how to render; `crate::world`
+//! turns a [`Scene`] into something rays can be shot at.
+
+mod camera;
+mod light;
+mod material;
+mod node;
+
+pub use camera::Camera;
+pub use light::Light;
+pub use material::{Material, Phong, TextureKind};
+pub use node::{Mesh, Node, Shape};
+
+use crate::math::Vec3;
+
+/// Background colour and the ambient light that every surface receives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Background {
+    /// Colour of rays that hit nothing.
+    pub color: Vec3,
+    /// Ambient light, multiplied by each material's diffuse colour.
+    pub ambient: Vec3,
+}
+
+impl Default for Background {
+    /// The course's defaults: grey background, no ambient light.
+    fn default() -> Self {
+        Self {
+            color: Vec3::splat(0.5),
+            ambient: Vec3::ZERO,
+        }
+    }
+}
+
+/// A whole scene: one camera, lights, background, a material table and the
+/// object tree. Materials are referenced by index from the tree.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// The light sources.
+    pub lights: Vec<Light>,
+    /// Background colour and ambient light.
+    pub background: Background,
+    /// Material table; textures refer to earlier entries by index.
+    pub materials: Vec<Material>,
+    /// The object tree (a group at the top).
+    pub root: Node,
+}
+
+impl Scene {
+    /// Counts of what the scene holds, for `glint info` and statistics.
+    pub fn summary(&self) -> Summary {
+        let mut s = Summary {
+            lights: self.lights.len(),
+            materials: self.materials.len(),
+            ..Summary::default()
+        };
+        self.root.count(&mut s);
+        s
+    }
+}
+
+/// Counts of the objects in a scene.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Summary {
+    /// Spheres.
+    pub spheres: usize,
+    /// Planes.
+    pub planes: usize,
+    /// Single triangles plus mesh triangles.
+    pub triangles: usize,
+    /// Mesh references (a mesh used twice counts twice).
+    pub meshes: usize,
+    /// Groups.
+    pub groups: usize,
+    /// Transforms.
+    pub transforms: usize,
+    /// Lights.
+    pub lights: usize,
+    /// Materials (textures included).
+    pub materials: usize,
+}
