@@ -1,3 +1,12 @@
 //! glint: a teaching-grade, production-fast CPU ray tracer.
+pub mod accel;
+pub mod integrator;
+pub mod light;
+pub mod material;
 pub mod math;
+pub mod output;
+pub mod render;
 pub mod scene;
+pub mod shape;
+pub mod stats;
+pub mod world;

@@ -1,0 +1,208 @@
+//! Positioned parse errors and their rustc-style rendering.
+
+use std::fmt::Write as _;
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// An error in a scene or mesh file, located at a 1-based line and column.
+///
+/// `Display` gives the one-line form `file:line:col: expected X, found Y`;
+/// [`ParseError::render`] adds the offending source line with a caret under it.
+/// Errors that have no position (the file cannot be read at all) use line 0,
+/// column 0.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}:{line}:{col}: expected {expected}, found {found}", file.display())]
+pub struct ParseError {
+    /// The file the error is in (a mesh error names the OBJ file).
+    pub file: PathBuf,
+    /// 1-based line; 0 when the file could not be read.
+    pub line: usize,
+    /// 1-based column in characters; 0 when the file could not be read.
+    pub col: usize,
+    /// What the reader wanted at this point.
+    pub expected: String,
+    /// What it found: a quoted token such as `'Sphre'`, or `end of file`.
+    pub found: String,
+    /// The text of line `line`, when there is one.
+    pub source_line: Option<String>,
+}
+
+impl ParseError {
+    /// An error at `line:col` of `src`, the text of `file`.
+    pub(crate) fn at(
+        file: &Path,
+        src: &str,
+        line: usize,
+        col: usize,
+        expected: impl Into<String>,
+        found: impl Into<String>,
+    ) -> Self {
+        let source_line = line
+            .checked_sub(1)
+            .and_then(|i| src.split('\n').nth(i))
+            .map(|l| l.trim_end_matches('\r').to_owned());
+        Self {
+            file: file.to_owned(),
+            line,
+            col,
+            expected: expected.into(),
+            found: found.into(),
+            source_line,
+        }
+    }
+
+    /// An error for a file that could not be read at all (no position).
+    pub(crate) fn unreadable(file: &Path, err: &io::Error, expected: &str) -> Self {
+        Self {
+            file: file.to_owned(),
+            line: 0,
+            col: 0,
+            expected: expected.to_owned(),
+            found: format!("{} ({})", quote(&file.display().to_string()), io_reason(err)),
+            source_line: None,
+        }
+    }
+
+    /// The message, then the source line with the offending token underlined,
+    /// laid out like rustc's diagnostics.
+    pub fn render(&self) -> String {
+        let mut out = format!("error: expected {}, found {}\n", self.expected, self.found);
+        let gutter = " ".repeat(self.line.to_string().len());
+        let _ = writeln!(
+            out,
+            "{gutter}--> {}:{}:{}",
+            self.file.display(),
+            self.line,
+            self.col
+        );
+        let Some(text) = self.source_line.as_deref().filter(|_| self.line > 0) else {
+            return out;
+        };
+        let shown: String = text.chars().map(printable).collect();
+        // Copy tabs into the padding so the caret lines up however the
+        // terminal expands them.
+        let pad: String = text
+            .chars()
+            .take(self.col.saturating_sub(1))
+            .map(|c| if c == '\t' { '\t' } else { ' ' })
+            .collect();
+        let _ = writeln!(out, "{gutter} |");
+        let _ = writeln!(out, "{} | {shown}", self.line);
+        let _ = writeln!(out, "{gutter} | {pad}{}", "^".repeat(token_width(text, self.col)));
+        out
+    }
+}
+
+/// Width in characters of the token starting at 1-based column `col`, at least 1.
+fn token_width(line: &str, col: usize) -> usize {
+    let rest = line.chars().skip(col.saturating_sub(1));
+    let mut n = 0;
+    for c in rest {
+        if c.is_whitespace() || ((c == '{' || c == '}') && n > 0) {
+            break;
+        }
+        n += 1;
+        if c == '{' || c == '}' {
+            break;
+        }
+    }
+    n.max(1)
+}
+
+/// Control characters would garble a terminal; show them as one-column marks.
+fn printable(c: char) -> char {
+    if c.is_control() && c != '\t' {
+        '\u{FFFD}'
+    } else {
+        c
+    }
+}
+
+/// A token as it appears in messages: single-quoted, control characters
+/// escaped, long tokens shortened.
+pub(crate) fn quote(text: &str) -> String {
+    const MAX: usize = 40;
+    let mut s = String::from("'");
+    for (i, c) in text.chars().enumerate() {
+        if i == MAX {
+            s.push('…');
+            break;
+        }
+        if c.is_control() || c == '\'' || c == '\\' {
+            s.extend(c.escape_default());
+        } else {
+            s.push(c);
+        }
+    }
+    s.push('\'');
+    s
+}
+
+/// An I/O error's reason without the "(os error N)" suffix.
+pub(crate) fn io_reason(err: &io::Error) -> String {
+    let s = err.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_owned(),
+        None => s,
+    }
+}
+
+/// The bytes as UTF-8 text, or an error at the first byte that is not,
+/// which is how binary files are turned away.
+pub(crate) fn decode<'a>(bytes: &'a [u8], file: &Path) -> Result<&'a str, ParseError> {
+    std::str::from_utf8(bytes).map_err(|e| {
+        let good = e.valid_up_to();
+        // The valid prefix is UTF-8, so it can be searched for the position.
+        let prefix = std::str::from_utf8(&bytes[..good]).unwrap_or_default();
+        let line = prefix.matches('\n').count() + 1;
+        let line_start = prefix.rfind('\n').map_or(0, |i| i + 1);
+        let col = prefix[line_start..].chars().count() + 1;
+        let lossy = String::from_utf8_lossy(bytes);
+        ParseError::at(
+            file,
+            &lossy,
+            line,
+            col,
+            "UTF-8 text",
+            format!("byte 0x{:02x} (is this a binary file?)", bytes[good]),
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> ParseError {
+        let src = "Group {\n\tSphre {\n}";
+        ParseError::at(Path::new("a.txt"), src, 2, 2, "an object", quote("Sphre"))
+    }
+
+    #[test]
+    fn display_is_one_line() {
+        assert_eq!(
+            sample().to_string(),
+            "a.txt:2:2: expected an object, found 'Sphre'"
+        );
+    }
+
+    #[test]
+    fn render_underlines_the_token() {
+        let r = sample().render();
+        assert!(r.contains("2 | \tSphre {"), "{r}");
+        assert!(r.contains("  | \t^^^^^\n"), "{r}");
+    }
+
+    #[test]
+    fn quote_escapes_and_shortens() {
+        assert_eq!(quote("a\u{0}b"), "'a\\u{0}b'");
+        assert!(quote(&"x".repeat(100)).ends_with("…'"));
+    }
+
+    #[test]
+    fn decode_points_at_the_first_bad_byte() {
+        let e = decode(b"ab\ncd\xffe", Path::new("b.txt")).unwrap_err();
+        assert_eq!((e.line, e.col), (2, 3));
+        assert!(e.found.contains("0xff"));
+    }
+}

@@ -1,0 +1,64 @@
+//! Where reflection and refraction directions come from.
+
+use crate::math::Vec3;
+
+/// Mirror direction of `d` about the unit normal `n`: `d - 2(d·n)n`.
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// Refracted direction of unit `d` through a surface with unit normal `n`
+/// facing the incoming side (`d·n < 0`), from index `n_i` into index `n_t`
+/// (Snell: `n_i sin θi = n_t sin θt`). `None` on total internal reflection.
+pub fn refract(d: Vec3, n: Vec3, n_i: f32, n_t: f32) -> Option<Vec3> {
+    let eta = n_i / n_t;
+    let cos_i = -d.dot(n);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t > 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some((eta * d + (eta * cos_i - cos_t) * n).normalize())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mirror() {
+        let d = Vec3::new(1.0, -1.0, 0.0);
+        assert_eq!(reflect(d, Vec3::Y), Vec3::new(1.0, 1.0, 0.0));
+    }
+
+    #[test]
+    fn snell_law_holds() {
+        let d = Vec3::new(0.6, -0.8, 0.0);
+        let t = refract(d, Vec3::Y, 1.0, 1.5).unwrap();
+        let sin_i = d.x;
+        let sin_t = t.x;
+        assert!((1.0 * sin_i - 1.5 * sin_t).abs() < 1e-6);
+        assert!(t.y < 0.0 && (t.length() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn equal_indices_go_straight() {
+        let d = Vec3::new(0.6, -0.8, 0.0);
+        assert!((refract(d, Vec3::Y, 1.3, 1.3).unwrap() - d).length() < 1e-6);
+    }
+
+    #[test]
+    fn total_internal_reflection_beyond_critical_angle() {
+        // Critical angle from 1.5 to 1: asin(1/1.5) ≈ 41.8°.
+        let steep = Vec3::new(0.6, -0.8, 0.0); // 36.9° from the normal
+        assert!(refract(steep, Vec3::Y, 1.5, 1.0).is_some());
+        let grazing = Vec3::new(0.8, -0.6, 0.0); // 53.1°
+        assert!(refract(grazing, Vec3::Y, 1.5, 1.0).is_none());
+    }
+
+    #[test]
+    fn normal_incidence_passes() {
+        let t = refract(Vec3::NEG_Y, Vec3::Y, 1.0, 2.0).unwrap();
+        assert!((t - Vec3::NEG_Y).length() < 1e-6);
+    }
+}

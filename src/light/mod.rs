@@ -1,0 +1,89 @@
+//! Light sampling: what a light sends to a surface point.
+
+use crate::math::Vec3;
+use crate::scene::Light;
+
+/// Light arriving at a point from one light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incident {
+    /// Unit direction from the point towards the light.
+    pub to_light: Vec3,
+    /// Colour arriving (after attenuation).
+    pub color: Vec3,
+    /// Distance to the light (infinite for directional lights); shadow rays
+    /// stop there.
+    pub distance: f32,
+}
+
+/// What `light` sends to point `p`.
+pub fn incident(light: &Light, p: Vec3) -> Incident {
+    match light {
+        Light::Directional { direction, color } => Incident {
+            to_light: -direction.normalize_or_zero(),
+            color: *color,
+            distance: f32::INFINITY,
+        },
+        Light::Point {
+            position,
+            color,
+            attenuation,
+        } => {
+            let d = *position - p;
+            let dist = d.length();
+            Incident {
+                to_light: d.normalize_or_zero(),
+                color: *color * attenuation_factor(*attenuation, dist),
+                distance: dist,
+            }
+        }
+    }
+}
+
+/// `1 / (c + l·d + q·d²)`; a zero denominator (all coefficients 0, or d = 0
+/// with no constant term) means no falloff rather than an infinite light.
+pub fn attenuation_factor(k: Vec3, d: f32) -> f32 {
+    let denom = k.x + k.y * d + k.z * d * d;
+    if denom > 0.0 && denom.is_finite() {
+        1.0 / denom
+    } else {
+        1.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn attenuation_constant_linear_quadratic() {
+        assert_eq!(attenuation_factor(Vec3::new(1.0, 0.0, 0.0), 10.0), 1.0);
+        assert!((attenuation_factor(Vec3::new(0.0, 0.5, 0.0), 4.0) - 0.5).abs() < 1e-6);
+        assert!((attenuation_factor(Vec3::new(0.0, 0.0, 0.25), 4.0) - 0.25).abs() < 1e-6);
+        assert!((attenuation_factor(Vec3::new(1.0, 1.0, 1.0), 1.0) - 1.0 / 3.0).abs() < 1e-6);
+        assert_eq!(attenuation_factor(Vec3::ZERO, 0.0), 1.0);
+    }
+
+    #[test]
+    fn point_light_direction_distance_and_falloff() {
+        let l = Light::Point {
+            position: Vec3::new(0.0, 4.0, 0.0),
+            color: Vec3::ONE,
+            attenuation: Vec3::new(0.0, 0.0, 1.0),
+        };
+        let i = incident(&l, Vec3::ZERO);
+        assert_eq!(i.to_light, Vec3::Y);
+        assert_eq!(i.distance, 4.0);
+        assert!((i.color.x - 1.0 / 16.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn directional_light_points_against_its_direction() {
+        let l = Light::Directional {
+            direction: Vec3::new(0.0, -2.0, 0.0),
+            color: Vec3::ONE,
+        };
+        let i = incident(&l, Vec3::ZERO);
+        assert_eq!(i.to_light, Vec3::Y);
+        assert!(i.distance.is_infinite());
+    }
+}

@@ -1,0 +1,135 @@
+use crate::math::{Ray, Vec2, Vec3};
+use crate::scene::Camera;
+
+/// A camera ready to make rays: an orthonormal frame built from the scene's
+/// direction and approximate up vector.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraModel {
+    center: Vec3,
+    direction: Vec3,
+    horizontal: Vec3,
+    up: Vec3,
+    /// Orthographic: world size of the screen; perspective: `2·tan(angle/2)`.
+    span: f32,
+    perspective: bool,
+}
+
+impl CameraModel {
+    /// The frame of `cam`: `horizontal = direction × up`, `up' = horizontal × direction`.
+    pub fn new(cam: &Camera) -> Self {
+        let (center, direction, up, span, perspective) = match *cam {
+            Camera::Orthographic {
+                center,
+                direction,
+                up,
+                size,
+            } => (center, direction, up, size, false),
+            Camera::Perspective {
+                center,
+                direction,
+                up,
+                angle_deg,
+            } => (
+                center,
+                direction,
+                up,
+                2.0 * (angle_deg.to_radians() * 0.5).tan(),
+                true,
+            ),
+        };
+        let direction = direction.normalize();
+        let horizontal = direction.cross(up).normalize();
+        let up = horizontal.cross(direction);
+        Self {
+            center,
+            direction,
+            horizontal,
+            up,
+            span,
+            perspective,
+        }
+    }
+
+    /// The ray through screen point `s` in `[0,1]²` (the square spanned by
+    /// the image's longer side; (0,0) is bottom-left).
+    pub fn ray(&self, s: Vec2) -> Ray {
+        let offset = (s.x - 0.5) * self.span * self.horizontal + (s.y - 0.5) * self.span * self.up;
+        if self.perspective {
+            Ray::new(self.center, (self.direction + offset).normalize())
+        } else {
+            Ray::new(self.center + offset, self.direction)
+        }
+    }
+
+    /// Smallest `t` a camera ray accepts: orthographic cameras see objects
+    /// behind their centre plane (scene1_07 puts the camera inside spheres).
+    pub fn tmin(&self) -> f32 {
+        if self.perspective {
+            0.0
+        } else {
+            f32::NEG_INFINITY
+        }
+    }
+}
+
+/// Screen coordinate of a point in pixel `(i, j)` at in-pixel offset `o`
+/// (`(0.5, 0.5)` = the centre) of a `w`×`h` image: the longer side spans
+/// `[0,1]`, the shorter one is centred and cropped.
+pub fn screen_point(i: u32, j: u32, o: Vec2, w: u32, h: u32) -> Vec2 {
+    let m = w.max(h) as f32;
+    Vec2::new(
+        (i as f32 + o.x - w as f32 * 0.5) / m + 0.5,
+        (j as f32 + o.y - h as f32 * 0.5) / m + 0.5,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal_for_skewed_up() {
+        let c = CameraModel::new(&Camera::Perspective {
+            center: Vec3::ZERO,
+            direction: Vec3::new(0.0, -6.0, -16.0),
+            up: Vec3::Y,
+            angle_deg: 30.0,
+        });
+        assert!(c.up.dot(c.direction).abs() < 1e-6);
+        assert!(c.horizontal.dot(c.direction).abs() < 1e-6);
+        assert!((c.up.length() - 1.0).abs() < 1e-6);
+        assert!(c.up.y > 0.0 && c.horizontal.x > 0.0);
+    }
+
+    #[test]
+    fn perspective_edges_are_at_half_angle() {
+        let c = CameraModel::new(&Camera::Perspective {
+            center: Vec3::ZERO,
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            angle_deg: 90.0,
+        });
+        let r = c.ray(Vec2::new(1.0, 0.5));
+        assert!((r.dir.x - r.dir.z.abs()).abs() < 1e-6); // 45° to the right
+    }
+
+    #[test]
+    fn orthographic_size_is_the_full_extent() {
+        let c = CameraModel::new(&Camera::Orthographic {
+            center: Vec3::new(0.0, 0.0, 10.0),
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            size: 5.0,
+        });
+        assert!((c.ray(Vec2::new(1.0, 0.5)).origin.x - 2.5).abs() < 1e-6);
+        assert!((c.ray(Vec2::new(0.5, 0.0)).origin.y + 2.5).abs() < 1e-6);
+        assert_eq!(c.tmin(), f32::NEG_INFINITY);
+    }
+
+    #[test]
+    fn wide_image_crops_vertically() {
+        let s = screen_point(0, 0, Vec2::splat(0.5), 400, 200);
+        assert!((s.x - 0.5 / 400.0).abs() < 1e-6);
+        assert!((s.y - (0.5 - 100.0 / 400.0 + 0.5 / 400.0)).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,44 @@
+use super::{depth_grey, normal_rgb};
+use crate::math::Vec3;
+
+/// What a render produced per pixel, row-major with row 0 at the top.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB, unclamped.
+    pub color: Vec<Vec3>,
+    /// Ray parameter of the eye ray's hit (infinite for a miss).
+    pub depth: Vec<f32>,
+    /// Unit normal at the eye ray's hit (zero for a miss).
+    pub normal: Vec<Vec3>,
+}
+
+impl Frame {
+    /// A frame of misses.
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            color: vec![Vec3::ZERO; n],
+            depth: vec![f32::INFINITY; n],
+            normal: vec![Vec3::ZERO; n],
+        }
+    }
+
+    /// The depth image for the range `[t0, t1]` (near = white).
+    pub fn depth_image(&self, t0: f32, t1: f32) -> Vec<Vec3> {
+        self.depth
+            .iter()
+            .map(|&t| Vec3::splat(depth_grey(t, t0, t1)))
+            .collect()
+    }
+
+    /// The normals image (`|n|` as RGB, black where nothing was hit).
+    pub fn normals_image(&self) -> Vec<Vec3> {
+        self.normal.iter().map(|&n| normal_rgb(n)).collect()
+    }
+}

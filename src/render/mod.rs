@@ -1,0 +1,92 @@
+//! The pixel loop: camera rays through every pixel, traced in parallel by rows,
+//! into a [`Frame`] of colour, depth and normal planes.
+
+mod camera;
+mod frame;
+
+pub use camera::{screen_point, CameraModel};
+pub use frame::Frame;
+
+use crate::integrator::{NoObserver, RayKind, Whitted};
+use crate::math::{Vec2, Vec3};
+use crate::stats::Counters;
+use crate::world::World;
+use rayon::prelude::*;
+
+/// Renders `world` seen through `camera` into a `width`×`height` frame with
+/// one ray through each pixel centre. Returns the merged counters.
+pub fn render(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &Whitted,
+    width: u32,
+    height: u32,
+) -> (Frame, Counters) {
+    let mut frame = Frame::new(width, height);
+    let w = width as usize;
+    let counters = frame
+        .color
+        .par_chunks_mut(w)
+        .zip(frame.depth.par_chunks_mut(w))
+        .zip(frame.normal.par_chunks_mut(w))
+        .enumerate()
+        .map(|(row, ((color, depth), normal))| {
+            let mut c = Counters::default();
+            // Row 0 of the frame is the top of the image; screen j grows upwards.
+            let j = height - 1 - row as u32;
+            for i in 0..width {
+                let s = screen_point(i, j, Vec2::splat(0.5), width, height);
+                let ray = camera.ray(s);
+                let (col, hit) = integrator.trace(
+                    world,
+                    &ray,
+                    camera.tmin(),
+                    RayKind::Primary,
+                    0,
+                    1.0,
+                    &mut c,
+                    &mut NoObserver,
+                );
+                let k = i as usize;
+                color[k] = col;
+                if let Some(h) = hit {
+                    depth[k] = h.t;
+                    normal[k] = h.normal;
+                }
+            }
+            c
+        })
+        .reduce(Counters::default, |mut a, b| {
+            a += b;
+            a
+        });
+    (frame, counters)
+}
+
+/// Grey level of the depth image: `t0` (near) is white, `t1` is black,
+/// clamped outside; a miss (infinite `t`) is black.
+pub fn depth_grey(t: f32, t0: f32, t1: f32) -> f32 {
+    if !t.is_finite() || t1 == t0 {
+        return 0.0;
+    }
+    ((t1 - t) / (t1 - t0)).clamp(0.0, 1.0)
+}
+
+/// Colour of the normals image: the absolute value of each component.
+pub fn normal_rgb(n: Vec3) -> Vec3 {
+    n.abs()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_maps_near_to_white() {
+        assert_eq!(depth_grey(9.0, 9.0, 10.0), 1.0);
+        assert_eq!(depth_grey(10.0, 9.0, 10.0), 0.0);
+        assert_eq!(depth_grey(9.5, 9.0, 10.0), 0.5);
+        assert_eq!(depth_grey(5.0, 9.0, 10.0), 1.0);
+        assert_eq!(depth_grey(f32::INFINITY, 9.0, 10.0), 0.0);
+    }
+}

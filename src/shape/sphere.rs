@@ -1,0 +1,129 @@
+use crate::math::{Aabb, Ray, Vec3};
+
+/// A sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3,
+    /// Radius (positive).
+    pub radius: f32,
+}
+
+impl Sphere {
+    /// Nearest root of `|o + t·d - c|² = r²` in `(tmin, tmax)`.
+    ///
+    /// Why this form: with `b' = (o - c)·d`, the discriminant is computed as
+    /// `r²·|d|² - |(o - c) - (b'/|d|²)·d|²·|d|²` (the squared distance from the centre
+    /// to the ray's line), which does not cancel catastrophically when the ray
+    /// starts far away; and the second root comes from `c/(a·t1)` (Vieta), which
+    /// keeps precision for the small root.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<f32> {
+        let oc = ray.origin - self.center;
+        let a = ray.dir.length_squared();
+        let half_b = oc.dot(ray.dir);
+        let c = oc.length_squared() - self.radius * self.radius;
+        let perp = oc - (half_b / a) * ray.dir;
+        let disc = a * (self.radius * self.radius - perp.length_squared());
+        if disc < 0.0 || a == 0.0 {
+            return None;
+        }
+        let q = -(half_b + half_b.signum() * disc.sqrt());
+        let (mut t0, mut t1) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        if t0 > tmin && t0 < tmax {
+            Some(t0)
+        } else if t1 > tmin && t1 < tmax {
+            Some(t1)
+        } else {
+            None
+        }
+    }
+
+    /// Outward unit normal at `p`.
+    pub fn normal(&self, p: Vec3) -> Vec3 {
+        (p - self.center) / self.radius
+    }
+
+    /// Bounding box.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::new(
+            self.center - Vec3::splat(self.radius),
+            self.center + Vec3::splat(self.radius),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit() -> Sphere {
+        Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        }
+    }
+
+    #[test]
+    fn hit_from_outside_gives_near_root() {
+        let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
+        let t = unit().intersect(&r, 0.0, f32::INFINITY).unwrap();
+        assert!((t - 4.0).abs() < 1e-6);
+        assert_eq!(unit().normal(r.at(t)), Vec3::NEG_Z);
+    }
+
+    #[test]
+    fn miss() {
+        let r = Ray::new(Vec3::new(0.0, 1.5, -5.0), Vec3::Z);
+        assert!(unit().intersect(&r, 0.0, f32::INFINITY).is_none());
+    }
+
+    #[test]
+    fn inside_gives_far_root() {
+        let r = Ray::new(Vec3::ZERO, Vec3::X);
+        let t = unit().intersect(&r, 0.0, f32::INFINITY).unwrap();
+        assert!((t - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn behind_is_a_miss() {
+        let r = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z);
+        assert!(unit().intersect(&r, 0.0, f32::INFINITY).is_none());
+    }
+
+    #[test]
+    fn tangent_touches_once() {
+        let r = Ray::new(Vec3::new(0.0, 1.0, -5.0), Vec3::Z);
+        let t = unit().intersect(&r, 0.0, f32::INFINITY).unwrap();
+        assert!((t - 5.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn unnormalized_direction_keeps_world_t() {
+        let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z * 2.0);
+        let t = unit().intersect(&r, 0.0, f32::INFINITY).unwrap();
+        assert!((t - 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn far_away_ray_keeps_precision() {
+        let s = Sphere {
+            center: Vec3::ZERO,
+            radius: 0.01,
+        };
+        let r = Ray::new(Vec3::new(0.0, 0.0, -1e4), Vec3::Z);
+        let t = s.intersect(&r, 0.0, f32::INFINITY).unwrap();
+        assert!((t - (1e4 - 0.01)).abs() < 2e-3);
+    }
+
+    #[test]
+    fn respects_t_range() {
+        let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
+        assert!(unit().intersect(&r, 0.0, 3.9).is_none());
+        let t = unit().intersect(&r, 4.5, f32::INFINITY).unwrap();
+        assert!((t - 6.0).abs() < 1e-6);
+    }
+}

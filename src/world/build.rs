@@ -1,0 +1,326 @@
+//! Scene → World: flattening the transform hierarchy.
+//!
+//! Why flatten: a ray that meets a transform node has to be carried into the
+//! child's space (two matrix products) before every test below it. Baking
+//! triangles, similarity-transformed spheres and planes into world space once
+//! at load removes that cost from every ray; only what cannot be baked (a
+//! sphere under non-uniform scale) keeps a [`Transformed`] wrapper.
+
+use super::{Primitive, World};
+use crate::accel::{AccelKind, Aggregate, Brute};
+use crate::math::{Mat4, Vec3};
+use crate::scene::{Material, Node, Phong, Scene, Shape as Desc};
+use crate::shape::{Plane, Shape, Sphere, Transformed, Triangle};
+use std::time::Instant;
+
+/// How to build the world.
+#[derive(Clone, Copy, Debug)]
+pub struct BuildOptions {
+    /// Which aggregate.
+    pub accel: AccelKind,
+    /// Bake transforms into world space (on by default; off to measure it).
+    pub flatten: bool,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        Self {
+            accel: AccelKind::default(),
+            flatten: true,
+        }
+    }
+}
+
+impl World {
+    /// Flattens `scene` and builds the aggregate.
+    pub fn build(scene: &Scene, opts: BuildOptions) -> World {
+        let mut materials = scene.materials.clone();
+        let default_material = materials.len() as u32;
+        materials.push(Material::Phong(Phong {
+            diffuse: Vec3::ONE,
+            ..Phong::default()
+        }));
+        let mut f = Flattener {
+            prims: Vec::new(),
+            object_from_world: vec![Mat4::IDENTITY],
+            default_material,
+            flatten: opts.flatten,
+        };
+        f.node(&scene.root, Mat4::IDENTITY, 0);
+        let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
+            (0..f.prims.len() as u32).partition(|&i| f.prims[i as usize].bounds().is_finite());
+        let start = Instant::now();
+        let accel = build_aggregate(opts.accel, &f.prims, bounded);
+        World {
+            build_ms: start.elapsed().as_secs_f64() * 1e3,
+            prims: f.prims,
+            accel,
+            unbounded,
+            materials,
+            lights: scene.lights.clone(),
+            background: scene.background.clone(),
+            object_from_world: f.object_from_world,
+        }
+    }
+}
+
+fn build_aggregate(kind: AccelKind, prims: &[Primitive], ids: Vec<u32>) -> Box<dyn Aggregate> {
+    match kind {
+        AccelKind::None => Box::new(Brute::new(prims, ids)),
+    }
+}
+
+struct Flattener {
+    prims: Vec<Primitive>,
+    object_from_world: Vec<Mat4>,
+    default_material: u32,
+    flatten: bool,
+}
+
+impl Flattener {
+    fn node(&mut self, node: &Node, m: Mat4, instance: u32) {
+        match node {
+            Node::Group(children) => children.iter().for_each(|c| self.node(c, m, instance)),
+            Node::Transform { matrix, child } => {
+                let m = m * *matrix;
+                let inv = m.inverse();
+                if !inv.is_finite() || m.determinant() == 0.0 {
+                    return; // a singular transform squashes its subtree to nothing visible
+                }
+                self.object_from_world.push(inv);
+                let instance = (self.object_from_world.len() - 1) as u32;
+                self.node(child, m, instance);
+            }
+            Node::Shape { shape, material } => {
+                let material = material.map_or(self.default_material, |i| i as u32);
+                let mut push = |shape: Shape| {
+                    self.prims.push(Primitive {
+                        shape,
+                        material,
+                        instance,
+                    })
+                };
+                let identity = m == Mat4::IDENTITY;
+                if !self.flatten && !identity {
+                    for s in object_shapes(shape) {
+                        if let Some(x) = Transformed::new(s, m) {
+                            push(Shape::Transformed(Box::new(x)));
+                        }
+                    }
+                    return;
+                }
+                match shape {
+                    Desc::Sphere { center, radius } => {
+                        let s = Sphere {
+                            center: *center,
+                            radius: *radius,
+                        };
+                        push(bake_sphere(s, m));
+                    }
+                    Desc::Plane { normal, offset } => {
+                        if let Some(p) =
+                            Plane::new(*normal, *offset).and_then(|p| p.transformed(&m))
+                        {
+                            push(Shape::Plane(p));
+                        }
+                    }
+                    Desc::Triangle(v) => push(Shape::Triangle(bake_triangle(v, &m))),
+                    Desc::Mesh(mesh) => {
+                        let pos: Vec<Vec3> = mesh
+                            .positions
+                            .iter()
+                            .map(|&p| m.transform_point3(p))
+                            .collect();
+                        let flip = m.determinant() < 0.0;
+                        for t in &mesh.triangles {
+                            let [a, b, c] = t.map(|i| pos[i as usize]);
+                            push(Shape::Triangle(oriented(a, b, c, flip)));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The object-space shapes of a description (a mesh gives one per triangle).
+fn object_shapes(d: &Desc) -> Vec<Shape> {
+    match d {
+        Desc::Sphere { center, radius } => vec![Shape::Sphere(Sphere {
+            center: *center,
+            radius: *radius,
+        })],
+        Desc::Plane { normal, offset } => Plane::new(*normal, *offset)
+            .map(Shape::Plane)
+            .into_iter()
+            .collect(),
+        Desc::Triangle([a, b, c]) => vec![Shape::Triangle(Triangle::new(*a, *b, *c))],
+        Desc::Mesh(mesh) => mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                Shape::Triangle(Triangle::new(a, b, c))
+            })
+            .collect(),
+    }
+}
+
+fn bake_triangle(v: &[Vec3; 3], m: &Mat4) -> Triangle {
+    let [a, b, c] = v.map(|p| m.transform_point3(p));
+    oriented(a, b, c, m.determinant() < 0.0)
+}
+
+/// A mirroring matrix reverses the winding; swapping two vertices keeps the
+/// front side where the inverse-transpose normal says it is.
+fn oriented(a: Vec3, b: Vec3, c: Vec3, flip: bool) -> Triangle {
+    if flip {
+        Triangle::new(a, c, b)
+    } else {
+        Triangle::new(a, b, c)
+    }
+}
+
+/// A sphere under a similarity (rotation, uniform scale, translation) is a
+/// sphere; anything else keeps its matrix.
+fn bake_sphere(s: Sphere, m: Mat4) -> Shape {
+    let cols = [
+        m.x_axis.truncate(),
+        m.y_axis.truncate(),
+        m.z_axis.truncate(),
+    ];
+    let scale = cols[0].length();
+    let rel = 1e-5 * scale.max(1e-30);
+    let uniform = cols.iter().all(|c| (c.length() - scale).abs() <= rel)
+        && cols[0].dot(cols[1]).abs() <= rel * scale
+        && cols[1].dot(cols[2]).abs() <= rel * scale
+        && cols[0].dot(cols[2]).abs() <= rel * scale
+        && m.row(3) == glam::Vec4::W;
+    if uniform {
+        Shape::Sphere(Sphere {
+            center: m.transform_point3(s.center),
+            radius: s.radius * scale,
+        })
+    } else {
+        match Transformed::new(Shape::Sphere(s), m) {
+            Some(x) => Shape::Transformed(Box::new(x)),
+            None => Shape::Sphere(Sphere {
+                center: m.transform_point3(s.center),
+                radius: 0.0,
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Ray;
+    use crate::scene::{Background, Camera};
+    use crate::stats::Counters;
+
+    fn scene(root: Node) -> Scene {
+        Scene {
+            camera: Camera::Orthographic {
+                center: Vec3::ZERO,
+                direction: Vec3::NEG_Z,
+                up: Vec3::Y,
+                size: 1.0,
+            },
+            lights: vec![],
+            background: Background::default(),
+            materials: vec![],
+            root,
+        }
+    }
+
+    fn sphere() -> Node {
+        Node::Shape {
+            shape: Desc::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+            },
+            material: None,
+        }
+    }
+
+    fn xf(m: Mat4, child: Node) -> Node {
+        Node::Transform {
+            matrix: m,
+            child: Box::new(child),
+        }
+    }
+
+    #[test]
+    fn similarity_sphere_is_baked() {
+        let m = Mat4::from_translation(Vec3::X)
+            * Mat4::from_rotation_y(0.3)
+            * Mat4::from_scale(Vec3::splat(2.0));
+        let w = World::build(&scene(xf(m, sphere())), BuildOptions::default());
+        match &w.prims[0].shape {
+            Shape::Sphere(s) => {
+                assert!((s.radius - 2.0).abs() < 1e-5);
+                assert!((s.center - Vec3::X).length() < 1e-6);
+            }
+            other => panic!("expected a baked sphere, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn squashed_sphere_keeps_its_matrix() {
+        let m = Mat4::from_scale(Vec3::new(1.0, 2.0, 1.0));
+        let w = World::build(&scene(xf(m, sphere())), BuildOptions::default());
+        assert!(matches!(w.prims[0].shape, Shape::Transformed(_)));
+    }
+
+    #[test]
+    fn nested_transforms_compose_outer_first() {
+        // Translate(5) ∘ Scale(2): the unit sphere's centre lands at x = 5, radius 2.
+        let inner = xf(Mat4::from_scale(Vec3::splat(2.0)), sphere());
+        let root = xf(Mat4::from_translation(Vec3::new(5.0, 0.0, 0.0)), inner);
+        let w = World::build(&scene(root), BuildOptions::default());
+        let r = Ray::new(Vec3::new(5.0, 0.0, 10.0), Vec3::NEG_Z);
+        let h = w
+            .intersect(&r, 0.0, f32::INFINITY, &mut Counters::default())
+            .unwrap();
+        assert!((h.t - 8.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn flattening_off_gives_the_same_hits() {
+        let m = Mat4::from_translation(Vec3::new(0.5, 0.0, 0.0)) * Mat4::from_rotation_z(0.4);
+        let tri = Node::Shape {
+            shape: Desc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
+            material: None,
+        };
+        let root = Node::Group(vec![xf(m, tri), xf(m, sphere())]);
+        let on = World::build(&scene(root.clone()), BuildOptions::default());
+        let off = World::build(
+            &scene(root),
+            BuildOptions {
+                flatten: false,
+                ..BuildOptions::default()
+            },
+        );
+        for k in 0..50 {
+            let x = -1.5 + 0.06 * k as f32;
+            let r = Ray::new(Vec3::new(x, 0.3, 5.0), Vec3::new(0.01, 0.0, -1.0));
+            let mut c = Counters::default();
+            let a = on.intersect(&r, 0.0, f32::INFINITY, &mut c);
+            let b = off.intersect(&r, 0.0, f32::INFINITY, &mut c);
+            assert_eq!(a.is_some(), b.is_some());
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!((a.t - b.t).abs() < 1e-4);
+                assert!((a.normal - b.normal).length() < 1e-4);
+            }
+        }
+    }
+
+    #[test]
+    fn mirrored_triangle_keeps_inverse_transpose_normal() {
+        let m = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        let t = bake_triangle(&[Vec3::ZERO, Vec3::X, Vec3::Y], &m);
+        // (M^-1)^T (0,0,1) = (0,0,1).
+        assert!((t.normal - Vec3::Z).length() < 1e-6);
+    }
+}
