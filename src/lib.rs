@@ -1,6 +1,8 @@
 //! glint: a teaching-grade, production-fast CPU ray tracer.
 pub mod accel;
+pub mod format;
 pub mod integrator;
+pub mod job;
 pub mod light;
 pub mod material;
 pub mod math;

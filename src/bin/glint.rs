@@ -1,1 +1,148 @@
-fn main() {}
+//! The glint command line: `glint render SCENE -o OUT`, `glint info SCENE`.
+
+use clap::{Args, Parser, Subcommand};
+use glint::format::load_scene;
+use glint::job::Job;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "glint",
+    version,
+    about = "A teaching-grade, production-fast CPU ray tracer"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an image.
+    Render(RenderArgs),
+    /// Show what a scene file holds.
+    Info {
+        /// Scene file (MIT 6.837 format).
+        scene: PathBuf,
+    },
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file (MIT 6.837 format).
+    scene: PathBuf,
+    /// Output image (.png, .tga, .ppm, .bmp).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Image size in pixels.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
+    size: Vec<u32>,
+    /// Maximum number of reflection/refraction bounces.
+    #[arg(long, default_value_t = 5)]
+    bounces: u32,
+    /// Prune ray-tree branches contributing less than this.
+    #[arg(long, default_value_t = 0.01)]
+    weight: f32,
+    /// Cast shadow rays.
+    #[arg(long)]
+    shadows: bool,
+    /// Filter light through transparent occluders instead of opaque shadows.
+    #[arg(long)]
+    transparent_shadows: bool,
+    /// Light the back sides of surfaces.
+    #[arg(long)]
+    shade_back: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Print statistics.
+    #[arg(long)]
+    stats: bool,
+    /// Also write a depth image: near, far, file.
+    #[arg(long, num_args = 3, value_names = ["T0", "T1", "FILE"])]
+    depth: Option<Vec<String>>,
+    /// Also write a normals image.
+    #[arg(long)]
+    normals: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Render(a) => render(a),
+        Command::Info { scene } => info(scene),
+    }
+}
+
+fn render(a: RenderArgs) -> ExitCode {
+    let mut job = Job::new(a.scene, a.size[0], a.size[1]);
+    job.output = Some(a.output);
+    job.integrator.bounces = a.bounces;
+    job.integrator.weight_cutoff = a.weight;
+    job.integrator.shadows = a.shadows || a.transparent_shadows;
+    job.integrator.transparent_shadows = a.transparent_shadows;
+    job.integrator.shade_back = a.shade_back;
+    job.threads = a.threads;
+    job.normals = a.normals;
+    if let Some(d) = a.depth {
+        let (Ok(t0), Ok(t1)) = (d[0].parse(), d[1].parse()) else {
+            eprintln!("glint: --depth expects two numbers and a file, got {d:?}");
+            return ExitCode::from(2);
+        };
+        job.depth = Some((t0, t1, PathBuf::from(&d[2])));
+    }
+    match job.run() {
+        Ok(report) => {
+            if a.stats {
+                print!("{}", report.stats_text());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("glint: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+fn info(path: PathBuf) -> ExitCode {
+    let scene = match load_scene(&path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("glint: {}", e.render());
+            return ExitCode::from(2);
+        }
+    };
+    let s = scene.summary();
+    let world = glint::world::World::build(&scene, Default::default());
+    let b = world.bounds();
+    println!("scene       {}", path.display());
+    println!("camera      {}", camera_name(&scene.camera));
+    println!(
+        "objects     {} spheres, {} planes, {} triangles ({} meshes)",
+        s.spheres, s.planes, s.triangles, s.meshes
+    );
+    println!(
+        "structure   {} groups, {} transforms",
+        s.groups, s.transforms
+    );
+    println!("lights      {}", s.lights);
+    println!("materials   {}", s.materials);
+    if b.is_empty() {
+        println!("bounds      (no bounded objects)");
+    } else {
+        println!(
+            "bounds      ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4})",
+            b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+fn camera_name(c: &glint::scene::Camera) -> &'static str {
+    match c {
+        glint::scene::Camera::Orthographic { .. } => "orthographic",
+        glint::scene::Camera::Perspective { .. } => "perspective",
+    }
+}

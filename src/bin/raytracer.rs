@@ -1,1 +1,125 @@
-fn main() {}
+//! The MIT 6.837 command line, verbatim:
+//! `raytracer -input scene.txt -size 200 200 -output out.tga -shadows -bounces 3 -weight 0.01`.
+
+use glint::job::Job;
+use glint::render::PixelOffset;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (job, stats) = match parse(&args) {
+        Ok(j) => j,
+        Err(msg) => {
+            eprintln!("raytracer: {msg}");
+            return ExitCode::from(2);
+        }
+    };
+    match job.run() {
+        Ok(report) => {
+            if stats {
+                print!("{}", report.stats_text());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("raytracer: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+/// Flags of the course's OpenGL preview: accepted so the handouts' lines run.
+const PREVIEW_ONLY: &[(&str, usize)] = &[("-gui", 0), ("-tessellation", 2), ("-gouraud", 0)];
+
+fn parse(args: &[String]) -> Result<(Job, bool), String> {
+    let mut it = args.iter();
+    let mut job = Job::new(PathBuf::new(), 100, 100);
+    job.pixel_offset = PixelOffset::CORNER;
+    let mut input = None;
+    let mut stats = false;
+    let mut ignored = Vec::new();
+    while let Some(flag) = it.next() {
+        let mut value = |what: &str| -> Result<&String, String> {
+            it.next().ok_or_else(|| format!("{flag} expects {what}"))
+        };
+        match flag.as_str() {
+            "-input" => input = Some(PathBuf::from(value("a scene file")?)),
+            "-output" => job.output = Some(PathBuf::from(value("an image file")?)),
+            "-size" => {
+                job.width = number(flag, value("a width")?)?;
+                job.height = number(flag, value("a height")?)?;
+            }
+            "-depth" => {
+                let t0 = number(flag, value("t0 t1 file")?)?;
+                let t1 = number(flag, value("t1 file")?)?;
+                job.depth = Some((t0, t1, PathBuf::from(value("a file")?)));
+            }
+            "-normals" => job.normals = Some(PathBuf::from(value("an image file")?)),
+            "-shade_back" => job.integrator.shade_back = true,
+            "-shadows" => job.integrator.shadows = true,
+            "-transparent_shadows" => job.integrator.transparent_shadows = true,
+            "-bounces" => job.integrator.bounces = number(flag, value("a count")?)?,
+            "-weight" => job.integrator.weight_cutoff = number(flag, value("a weight")?)?,
+            "-stats" => stats = true,
+            "-threads" => job.threads = Some(number(flag, value("a count")?)?),
+            other => match PREVIEW_ONLY.iter().find(|(f, _)| *f == other) {
+                Some((f, n)) => {
+                    for _ in 0..*n {
+                        value("its arguments")?;
+                    }
+                    ignored.push(*f);
+                }
+                None => return Err(format!("unknown flag '{other}'")),
+            },
+        }
+    }
+    if !ignored.is_empty() {
+        eprintln!(
+            "raytracer: ignoring preview-only flags: {}",
+            ignored.join(" ")
+        );
+    }
+    job.input = input.ok_or("missing -input SCENE")?;
+    Ok((job, stats))
+}
+
+fn number<T: std::str::FromStr>(flag: &str, s: &str) -> Result<T, String> {
+    s.parse()
+        .map_err(|_| format!("{flag}: '{s}' is not a valid number"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(s: &str) -> Vec<String> {
+        s.split_whitespace().map(String::from).collect()
+    }
+
+    #[test]
+    fn handout_line_parses() {
+        let (j, _) = parse(&args(
+            "-input scene4_14_faceted_gem.txt -size 200 100 -output out.tga -shadows -shade_back -bounces 3 -weight 0.01 -gui -tessellation 10 5",
+        ))
+        .unwrap();
+        assert_eq!((j.width, j.height), (200, 100));
+        assert!(j.integrator.shadows && j.integrator.shade_back);
+        assert_eq!(j.integrator.bounces, 3);
+        assert_eq!(j.integrator.weight_cutoff, 0.01);
+    }
+
+    #[test]
+    fn unknown_flag_is_named() {
+        let e = parse(&args("-input a.txt -bogus")).unwrap_err();
+        assert!(e.contains("-bogus"));
+    }
+
+    #[test]
+    fn missing_value_and_bad_number() {
+        assert!(parse(&args("-input a.txt -size 200")).is_err());
+        assert!(parse(&args("-input a.txt -bounces x"))
+            .unwrap_err()
+            .contains("'x'"));
+    }
+}

@@ -58,7 +58,11 @@ impl ParseError {
             line: 0,
             col: 0,
             expected: expected.to_owned(),
-            found: format!("{} ({})", quote(&file.display().to_string()), io_reason(err)),
+            found: format!(
+                "{} ({})",
+                quote(&file.display().to_string()),
+                io_reason(err)
+            ),
             source_line: None,
         }
     }
@@ -88,7 +92,11 @@ impl ParseError {
             .collect();
         let _ = writeln!(out, "{gutter} |");
         let _ = writeln!(out, "{} | {shown}", self.line);
-        let _ = writeln!(out, "{gutter} | {pad}{}", "^".repeat(token_width(text, self.col)));
+        let _ = writeln!(
+            out,
+            "{gutter} | {pad}{}",
+            "^".repeat(token_width(text, self.col))
+        );
         out
     }
 }

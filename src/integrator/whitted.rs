@@ -99,18 +99,17 @@ impl Whitted {
         let mut color = world.background.ambient * m.diffuse;
         for light in &world.lights {
             let inc = incident(light, p);
-            if n.dot(inc.to_light) <= 0.0 {
-                continue; // the light is behind the surface: no shadow ray needed
+            let reflected = phong_light(&m, n, inc.to_light, -d, inc.color);
+            if reflected == Vec3::ZERO {
+                continue; // nothing to shadow: no shadow ray needed
             }
-            let mut arriving = inc.color;
             if self.shadows {
                 let shadow = Ray::new(offset_origin(p, n, inc.to_light), inc.to_light);
-                arriving *= self.light_through(world, &shadow, inc.distance, depth, c, obs);
-                if arriving == Vec3::ZERO {
-                    continue;
-                }
+                color +=
+                    reflected * self.light_through(world, &shadow, inc.distance, depth, c, obs);
+            } else {
+                color += reflected;
             }
-            color += phong_light(&m, n, inc.to_light, -d, arriving);
         }
 
         if depth >= self.bounces {

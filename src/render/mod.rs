@@ -13,14 +13,30 @@ use crate::stats::Counters;
 use crate::world::World;
 use rayon::prelude::*;
 
+/// Where in each pixel the single eye ray goes.
+///
+/// `(0.5, 0.5)` is the pixel centre. The 6.837 reference renders match the
+/// pixel's lower-left corner `(0, 0)` exactly (screen point `i/w`, the usual
+/// loop of the course's ray-casting assignments), so `raytracer` uses that;
+/// `glint render` uses the centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelOffset(pub Vec2);
+
+impl PixelOffset {
+    /// The pixel centre.
+    pub const CENTER: PixelOffset = PixelOffset(Vec2::splat(0.5));
+    /// The pixel's lower-left corner (the course's convention).
+    pub const CORNER: PixelOffset = PixelOffset(Vec2::ZERO);
+}
+
 /// Renders `world` seen through `camera` into a `width`×`height` frame with
-/// one ray through each pixel centre. Returns the merged counters.
+/// one ray through each pixel at `offset`. Returns the merged counters.
 pub fn render(
     world: &World,
     camera: &CameraModel,
     integrator: &Whitted,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
+    offset: PixelOffset,
 ) -> (Frame, Counters) {
     let mut frame = Frame::new(width, height);
     let w = width as usize;
@@ -35,7 +51,7 @@ pub fn render(
             // Row 0 of the frame is the top of the image; screen j grows upwards.
             let j = height - 1 - row as u32;
             for i in 0..width {
-                let s = screen_point(i, j, Vec2::splat(0.5), width, height);
+                let s = screen_point(i, j, offset.0, width, height);
                 let ray = camera.ray(s);
                 let (col, hit) = integrator.trace(
                     world,

@@ -18,10 +18,11 @@ pub struct Phong {
 }
 
 impl Default for Phong {
-    /// The course's defaults: black, exponent 1, index of refraction 1.
+    /// The course's parser defaults: white diffuse, no specular, exponent 1,
+    /// not reflective, opaque, index of refraction 1.
     fn default() -> Self {
         Self {
-            diffuse: Vec3::ZERO,
+            diffuse: Vec3::ONE,
             specular: Vec3::ZERO,
             exponent: 1.0,
             reflective: Vec3::ZERO,

@@ -36,10 +36,7 @@ impl World {
     pub fn build(scene: &Scene, opts: BuildOptions) -> World {
         let mut materials = scene.materials.clone();
         let default_material = materials.len() as u32;
-        materials.push(Material::Phong(Phong {
-            diffuse: Vec3::ONE,
-            ..Phong::default()
-        }));
+        materials.push(Material::Phong(Phong::default()));
         let mut f = Flattener {
             prims: Vec::new(),
             object_from_world: vec![Mat4::IDENTITY],

@@ -1,0 +1,226 @@
+//! The object tree: groups with their sticky `MaterialIndex`, transforms,
+//! spheres, planes, triangles and meshes.
+
+use super::cursor::{closing, vec_text, Parser};
+use super::lexer::{Kind, Token};
+use super::Result;
+use crate::format::diagnostic::{io_reason, quote};
+use crate::format::obj::{self, LoadError};
+use crate::math::{Mat4, Vec3};
+use crate::scene::{Node, Shape};
+use std::path::Path;
+use std::sync::Arc;
+
+/// The keywords that start an object.
+const OBJECTS: [&str; 6] = [
+    "Sphere",
+    "Plane",
+    "Triangle",
+    "TriangleMesh",
+    "Group",
+    "Transform",
+];
+
+/// Deepest Group/Transform nesting accepted: far beyond any real scene, far
+/// below what would exhaust a thread's stack.
+const MAX_DEPTH: usize = 256;
+
+/// Material indices a Group's children start with: the enclosing one's.
+type Current = Option<usize>;
+
+impl<'a> Parser<'a> {
+    /// `Group { numObjects n (MaterialIndex i | object)* }`. The material index
+    /// is sticky: it applies to every later object of this group, including
+    /// nested groups and transforms, which start from it; changes inside a
+    /// nested group stay there.
+    pub(super) fn group(&mut self, kw: Token<'a>, inherited: Current) -> Result<Node> {
+        self.open(kw)?;
+        let n = self.count("numObjects")?;
+        let mut current = inherited;
+        let mut children = Vec::new();
+        loop {
+            let t = self.next();
+            match t {
+                Some(t) if t.kind == Kind::Close => {
+                    if children.len() < n {
+                        return Err(self.too_few(t, n, children.len(), "object", "numObjects"));
+                    }
+                    return Ok(Node::Group(children));
+                }
+                // Like the course's reader, nothing but `}` may follow the
+                // last object.
+                _ if children.len() == n => match t.filter(|t| is_object(*t)) {
+                    Some(t) => return Err(self.too_many(t, n, "object", "numObjects")),
+                    None => return Err(self.error(t, closing(kw))),
+                },
+                Some(t) if t.is("MaterialIndex") => {
+                    let (i, tok) = self.non_negative("a material index")?;
+                    self.material_index(i, tok)?;
+                    current = Some(i);
+                }
+                Some(t) if is_object(t) => children.push(self.object(t, current)?),
+                _ => {
+                    let expected =
+                        "an object (Sphere, Plane, Triangle, TriangleMesh, Group, Transform)";
+                    return Err(self.error(
+                        t,
+                        format!("{expected}, 'MaterialIndex', or {}", closing(kw)),
+                    ));
+                }
+            }
+        }
+    }
+
+    /// Any object; `kw` is its keyword (checked by the caller).
+    fn object(&mut self, kw: Token<'a>, material: Current) -> Result<Node> {
+        let shape = match kw.text {
+            "Group" | "Transform" => {
+                if self.depth == MAX_DEPTH {
+                    let expected = format!("at most {MAX_DEPTH} nested Groups and Transforms");
+                    return Err(self.error(Some(kw), expected));
+                }
+                self.depth += 1;
+                let node = match kw.text {
+                    "Group" => self.group(kw, material),
+                    _ => self.transform(kw, material),
+                };
+                self.depth -= 1;
+                return node;
+            }
+            "Sphere" => self.sphere(kw)?,
+            "Plane" => self.plane(kw)?,
+            "Triangle" => self.triangle(kw)?,
+            _ => self.mesh(kw)?,
+        };
+        Ok(Node::Shape { shape, material })
+    }
+
+    /// `Transform { command* object }`.
+    fn transform(&mut self, kw: Token<'a>, material: Current) -> Result<Node> {
+        self.open(kw)?;
+        let mut matrix = Mat4::IDENTITY;
+        let child = loop {
+            let t = self.next();
+            match t {
+                Some(t) if is_object(t) => break self.object(t, material)?,
+                Some(t) => match self.transform_command(t)? {
+                    Some(m) => matrix *= m,
+                    None => {
+                        return Err(
+                            self.error(Some(t), "a transform command or the object to transform")
+                        )
+                    }
+                },
+                None => return Err(self.error(t, "a transform command or the object to transform")),
+            }
+        };
+        match self.next() {
+            Some(t) if t.kind == Kind::Close => {}
+            other => {
+                let expected = format!("{} (a Transform holds one object)", closing(kw));
+                return Err(self.error(other, expected));
+            }
+        }
+        // Rendering maps rays through the inverse; a singular or overflowing
+        // matrix would fill the image with NaN.
+        let det = matrix.as_dmat4().determinant();
+        if !matrix.is_finite() || det == 0.0 || !det.is_finite() {
+            return Err(self.error_found(
+                Some(kw),
+                "an invertible transform",
+                "'Transform' with a singular matrix",
+            ));
+        }
+        Ok(Node::Transform {
+            matrix,
+            child: Box::new(child),
+        })
+    }
+
+    /// `Sphere { center V radius r }`, `r > 0`.
+    fn sphere(&mut self, kw: Token<'a>) -> Result<Shape> {
+        let (mut center, mut radius) = (None, None);
+        let close = self.fields(kw, &["center", "radius"], |p, f| {
+            match f.text {
+                "center" => center = Some(p.vec3()?.0),
+                _ => radius = Some(p.number()?),
+            }
+            Ok(())
+        })?;
+        let center = self.require(center, close, "center", kw)?;
+        let (radius, tok) = self.require(radius, close, "radius", kw)?;
+        if radius <= 0.0 {
+            return Err(self.error(Some(tok), "a positive radius"));
+        }
+        Ok(Shape::Sphere { center, radius })
+    }
+
+    /// `Plane { normal V offset d }`: the points `p` with `normal · p = d`.
+    fn plane(&mut self, kw: Token<'a>) -> Result<Shape> {
+        let (mut normal, mut offset) = (None, None);
+        let close = self.fields(kw, &["normal", "offset"], |p, f| {
+            match f.text {
+                "normal" => normal = Some(p.vec3()?),
+                _ => offset = Some(p.number()?.0),
+            }
+            Ok(())
+        })?;
+        let (normal, toks) = self.require(normal, close, "normal", kw)?;
+        let offset = self.require(offset, close, "offset", kw)?;
+        if normal.as_dvec3().length_squared() == 0.0 {
+            return Err(self.error_found(
+                Some(toks[0]),
+                "a non-zero plane normal",
+                vec_text(&toks),
+            ));
+        }
+        Ok(Shape::Plane { normal, offset })
+    }
+
+    /// `Triangle { vertex0 V vertex1 V vertex2 V }`. Degenerate triangles are
+    /// allowed: they are harmless, and meshes are full of them.
+    fn triangle(&mut self, kw: Token<'a>) -> Result<Shape> {
+        let mut v: [Option<Vec3>; 3] = [None; 3];
+        let names = ["vertex0", "vertex1", "vertex2"];
+        let close = self.fields(kw, &names, |p, f| {
+            let i = names.iter().position(|n| *n == f.text).unwrap_or(0);
+            v[i] = Some(p.vec3()?.0);
+            Ok(())
+        })?;
+        let mut out = [Vec3::ZERO; 3];
+        for i in 0..3 {
+            out[i] = self.require(v[i], close, names[i], kw)?;
+        }
+        Ok(Shape::Triangle(out))
+    }
+
+    /// `TriangleMesh { obj_file NAME }`, NAME relative to the scene's folder.
+    /// Each file is loaded once per scene and shared.
+    fn mesh(&mut self, kw: Token<'a>) -> Result<Shape> {
+        let mut name = None;
+        let close = self.fields(kw, &["obj_file"], |p, _| {
+            name = Some(p.word("an OBJ file name")?);
+            Ok(())
+        })?;
+        let name = self.require(name, close, "obj_file", kw)?;
+        let path = self.file.parent().unwrap_or(Path::new("")).join(name.text);
+        if let Some(mesh) = self.meshes.get(&path) {
+            return Ok(Shape::Mesh(Arc::clone(mesh)));
+        }
+        let mesh = match obj::load(&path) {
+            Ok(m) => Arc::new(m),
+            Err(LoadError::Io(e)) => {
+                let found = format!("{} ({})", quote(name.text), io_reason(&e));
+                return Err(self.error_found(Some(name), "a readable OBJ file", found));
+            }
+            Err(LoadError::Parse(e)) => return Err(e),
+        };
+        self.meshes.insert(path, Arc::clone(&mesh));
+        Ok(Shape::Mesh(mesh))
+    }
+}
+
+/// True for a word that starts an object.
+fn is_object(t: Token<'_>) -> bool {
+    t.kind == Kind::Word && OBJECTS.contains(&t.text)
+}

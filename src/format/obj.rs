@@ -1,0 +1,355 @@
+//! Wavefront OBJ meshes, read with `tobj` (polygons triangulated as fans).
+//!
+//! `tobj` reports errors without positions, and finds out-of-range face
+//! indices only at the end of each object, so the text is first checked here
+//! line by line: every `v`/`vt`/`vn`/`f`/`l` line that `tobj` would reject is
+//! reported at its line and column. Anything `tobj` still rejects is reported
+//! at the line it was reading when it stopped.
+
+use super::diagnostic::{decode, quote, ParseError};
+use crate::math::Vec3;
+use crate::scene::Mesh;
+use std::io;
+use std::path::Path;
+
+/// Reads an OBJ file into a [`Mesh`] (positions and triangles only).
+pub fn load_obj(path: &Path) -> Result<Mesh, ParseError> {
+    load(path).map_err(|e| match e {
+        LoadError::Io(e) => ParseError::unreadable(path, &e, "a readable OBJ file"),
+        LoadError::Parse(e) => e,
+    })
+}
+
+/// Why a mesh could not be loaded: the scene parser reports an unreadable
+/// file at the `obj_file` token that named it, and bad contents in the OBJ.
+pub(crate) enum LoadError {
+    /// The file could not be read.
+    Io(io::Error),
+    /// The file's contents are not a valid OBJ mesh.
+    Parse(ParseError),
+}
+
+/// Reads and parses an OBJ file.
+pub(crate) fn load(path: &Path) -> Result<Mesh, LoadError> {
+    let bytes = std::fs::read(path).map_err(LoadError::Io)?;
+    parse_obj(&bytes, path).map_err(LoadError::Parse)
+}
+
+/// Parses OBJ `bytes`; `path` is used in messages.
+pub(crate) fn parse_obj(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
+    let text = decode(bytes, path)?;
+    check(text, path)?;
+    // `tobj` turns a polyline of 3+ points into a face; a mesh has no lines,
+    // so blank them (keeping the line count, for error positions).
+    let without_lines;
+    let bytes = if text.split('\n').any(|l| first_word(l) == Some("l")) {
+        without_lines = text
+            .split('\n')
+            .map(|l| if first_word(l) == Some("l") { "" } else { l })
+            .collect::<Vec<_>>()
+            .join("\n");
+        without_lines.as_bytes()
+    } else {
+        bytes
+    };
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let mut reader = io::Cursor::new(bytes);
+    // Materials are not needed: skip any `mtllib` without touching the disk.
+    let loaded = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    });
+    let (models, _) = loaded.map_err(|e| {
+        // `tobj` reads one line at a time, so the failing line is the one that
+        // ends where the reader stopped.
+        let stop = usize::try_from(reader.position())
+            .unwrap_or(usize::MAX)
+            .min(bytes.len());
+        let line = bytes[..stop.saturating_sub(1)]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
+        let line_text = text.split('\n').nth(line - 1).unwrap_or("").trim();
+        let found = format!("{} ({e})", quote(line_text));
+        ParseError::at(path, text, line, 1, "a valid OBJ line", found)
+    })?;
+    let mut mesh = Mesh::default();
+    for model in models {
+        let m = model.mesh;
+        let base = u32::try_from(mesh.positions.len())
+            .map_err(|_| ParseError::at(path, text, 0, 0, "fewer than 2^32 vertices", "more"))?;
+        mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2])),
+        );
+        mesh.triangles.extend(
+            m.indices
+                .chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
+    }
+    Ok(mesh)
+}
+
+/// Counts of the elements defined so far, which face indices refer to.
+#[derive(Default)]
+struct Counts {
+    v: usize,
+    vt: usize,
+    vn: usize,
+    /// Whether vertices carry colours; `tobj` needs all or none to.
+    colored: Option<bool>,
+}
+
+/// Checks every line `tobj` could reject, with positions.
+fn check(text: &str, path: &Path) -> Result<(), ParseError> {
+    let mut counts = Counts::default();
+    for (i, line) in text.split('\n').enumerate() {
+        let words = words(line);
+        let Some(&(_, first)) = words.first() else {
+            continue;
+        };
+        let at = |col: usize, expected: String, found: String| {
+            ParseError::at(path, text, i + 1, col, expected, found)
+        };
+        let end_col = line.trim_end().chars().count() + 1;
+        let found = |k: usize| {
+            words
+                .get(k)
+                .map_or_else(|| "end of line".to_owned(), |w| quote(w.1))
+        };
+        let col = |k: usize| words.get(k).map_or(end_col, |w| w.0);
+        match first {
+            "v" | "vt" | "vn" => {
+                let needed = if first == "vt" { 2 } else { 3 };
+                for k in 1..=needed {
+                    match words.get(k).and_then(|w| w.1.parse::<f32>().ok()) {
+                        // Only positions reach the renderer, so only they must be finite.
+                        Some(x) if x.is_finite() || first != "v" => {}
+                        Some(_) => return Err(at(col(k), "a finite number".into(), found(k))),
+                        None => {
+                            return Err(at(
+                                col(k),
+                                format!("{needed} numbers after '{first}'"),
+                                found(k),
+                            ))
+                        }
+                    }
+                }
+                match first {
+                    "v" => check_vertex_tail(&words, &mut counts)
+                        .map_err(|(k, e)| at(col(k), e, found(k)))?,
+                    "vt" => counts.vt += 1,
+                    _ => counts.vn += 1,
+                }
+            }
+            "f" => {
+                if words.len() == 1 {
+                    return Err(at(
+                        col(1),
+                        format!("vertex indices after '{first}'"),
+                        found(1),
+                    ));
+                }
+                for (k, &(c, w)) in words.iter().enumerate().skip(1) {
+                    check_corner(w, &counts).map_err(|e| at(c, e, found(k)))?;
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// After `v x y z`: nothing, a `w` divisor, or an RGB colour, as `tobj` reads
+/// them. Returns the word index and expectation of a problem.
+fn check_vertex_tail(words: &[(usize, &str)], counts: &mut Counts) -> Result<(), (usize, String)> {
+    let colored = match words.len() {
+        4 => false,
+        5 => {
+            let w: f32 = words[4]
+                .1
+                .parse()
+                .map_err(|_| (4, "a number (the w coordinate)".to_owned()))?;
+            let finite =
+                (1..4).all(|k| words[k].1.parse::<f32>().is_ok_and(|x| (x / w).is_finite()));
+            if w == 0.0 || !finite {
+                return Err((4, "a w coordinate giving finite x/w, y/w, z/w".to_owned()));
+            }
+            false
+        }
+        7 => {
+            // `tobj` silently stops at a bad colour, leaving the colour list
+            // out of step with the vertices.
+            if let Some(k) = (4..7).find(|&k| words[k].1.parse::<f32>().is_err()) {
+                return Err((k, "a number (a vertex colour)".to_owned()));
+            }
+            true
+        }
+        _ => {
+            return Err((
+                words.len().min(5),
+                "'v x y z', 'v x y z w' or 'v x y z r g b'".to_owned(),
+            ))
+        }
+    };
+    if *counts.colored.get_or_insert(colored) != colored {
+        return Err((4, "vertex colours on every vertex or on none".to_owned()));
+    }
+    counts.v += 1;
+    Ok(())
+}
+
+/// One face corner `v`, `v/t`, `v//n` or `v/t/n`: 1-based, or negative to
+/// count back from the last element defined; it must refer to an element
+/// defined earlier in the file.
+fn check_corner(word: &str, counts: &Counts) -> Result<(), String> {
+    let parts: Vec<&str> = word.split('/').collect();
+    if parts.len() > 3 || parts[0].is_empty() {
+        return Err("a face corner 'v', 'v/vt', 'v//vn' or 'v/vt/vn'".to_owned());
+    }
+    let kinds = [
+        ("vertex", counts.v),
+        ("texture coordinate", counts.vt),
+        ("normal", counts.vn),
+    ];
+    for (part, (what, n)) in parts.iter().zip(kinds) {
+        if part.is_empty() {
+            continue;
+        }
+        let i: i64 = part.parse().map_err(|_| format!("a {what} index"))?;
+        let ok = if i > 0 {
+            i.unsigned_abs() <= n as u64
+        } else {
+            i < 0 && i.unsigned_abs() <= n as u64
+        };
+        if !ok {
+            return Err(match n {
+                0 => format!("a {what} index, but no {what} is defined before this face"),
+                _ => format!("a {what} index from 1 to {n} (or -1 to -{n})"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The first word of a line.
+fn first_word(line: &str) -> Option<&str> {
+    line.split_whitespace().next()
+}
+
+/// The whitespace-separated words of a line with their 1-based columns.
+fn words(line: &str) -> Vec<(usize, &str)> {
+    let mut out = Vec::new();
+    let mut start: Option<(usize, usize)> = None;
+    for (col, (i, c)) in line.char_indices().enumerate() {
+        match (c.is_whitespace(), start) {
+            (true, Some((s, sc))) => {
+                out.push((sc, &line[s..i]));
+                start = None;
+            }
+            (false, None) => start = Some((i, col + 1)),
+            _ => {}
+        }
+    }
+    if let Some((s, sc)) = start {
+        out.push((sc, &line[s..]));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(src: &str) -> Result<Mesh, ParseError> {
+        parse_obj(src.as_bytes(), Path::new("m.obj"))
+    }
+
+    #[test]
+    fn polygons_are_triangulated() {
+        let m = parse("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").unwrap();
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.triangles.len(), 2);
+    }
+
+    #[test]
+    fn slashes_negative_indices_and_groups() {
+        let src = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\n\
+                   o a\nf 1/1/1 2//1 3/1\no b\nf -3 -2 -1\n";
+        let m = parse(src).unwrap();
+        assert_eq!(m.triangles.len(), 2);
+        for t in &m.triangles {
+            assert!(t.iter().all(|&i| (i as usize) < m.positions.len()));
+        }
+    }
+
+    #[test]
+    fn out_of_range_index_is_located() {
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2  4\n").unwrap_err();
+        assert_eq!((e.line, e.col), (4, 8));
+        assert_eq!(e.found, "'4'");
+        assert!(e.expected.contains("1 to 3"), "{e}");
+        let e = parse("v 0 0 0\nf 0 1 1\n").unwrap_err();
+        assert_eq!((e.line, e.col), (2, 3));
+    }
+
+    #[test]
+    fn bad_vertices_are_located() {
+        let e = parse("v 0 0 0\nv 1 nan 0\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.col, e.expected.as_str()),
+            (2, 5, "a finite number")
+        );
+        let e = parse("v 0 0\n").unwrap_err();
+        assert_eq!((e.line, e.col, e.found.as_str()), (1, 6, "end of line"));
+        let e = parse("v 1 1 1 0\n").unwrap_err();
+        assert_eq!((e.line, e.col), (1, 9));
+    }
+
+    #[test]
+    fn polylines_are_ignored() {
+        let m = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\nf 1 2 3\nl 1 2\n").unwrap();
+        assert_eq!(m.triangles.len(), 1);
+    }
+
+    #[test]
+    fn errors_only_tobj_finds_are_located_by_line() {
+        let e = parse("l 1 2 3 4\nv 0 0 0\n\nusemtl\nf 1 1 1\n").unwrap_err();
+        assert_eq!((e.line, e.col), (4, 1));
+        assert!(e.found.starts_with("'usemtl'"), "{e}");
+    }
+
+    proptest::proptest! {
+        /// Whatever the text, loading never panics, and a mesh it accepts has
+        /// finite positions and in-range triangle indices.
+        #[test]
+        fn arbitrary_obj_text_is_safe(
+            src in "((v|vt|vn|f|l|o|g|usemtl|mtllib|#)( [-+0-9./eEnaif]{1,5}){0,7}\n){0,16}"
+        ) {
+            if let Ok(m) = parse(&src) {
+                proptest::prop_assert!(m.positions.iter().all(|p| p.is_finite()));
+                let n = m.positions.len();
+                proptest::prop_assert!(m.triangles.iter().flatten().all(|&i| (i as usize) < n));
+            }
+        }
+    }
+
+    #[test]
+    fn binary_is_rejected() {
+        assert!(parse_obj(b"v 0 0 0\n\xff\xfe", Path::new("m.obj")).is_err());
+    }
+
+    #[test]
+    fn missing_file_is_an_io_error() {
+        let e = load_obj(Path::new("no/such/file.obj")).unwrap_err();
+        assert_eq!((e.line, e.col), (0, 0));
+        assert!(e.to_string().contains("No such file or directory"), "{e}");
+    }
+}

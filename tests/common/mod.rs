@@ -1,0 +1,123 @@
+//! Shared helpers of the integration tests: running the handouts' command
+//! lines with the real binary and comparing images with the references.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The course's scenes, relative to the crate root (where tests run).
+pub const SCENES: &str = "../shared/scenes/6837";
+/// The independent reference renders.
+pub const REFERENCE: &str = "../shared/reference/6837";
+
+/// How far an image is from its reference.
+#[derive(Debug, Clone, Copy)]
+pub struct Diff {
+    /// Mean absolute difference over all channels, 0-255 scale.
+    pub mean_abs: f64,
+    /// Fraction of pixels with some channel off by more than 24.
+    pub frac_off: f64,
+}
+
+/// Compares two images of the same size.
+pub fn diff(a: &Path, b: &Path) -> Result<Diff, String> {
+    let ia = image::open(a)
+        .map_err(|e| format!("{}: {e}", a.display()))?
+        .to_rgb8();
+    let ib = image::open(b)
+        .map_err(|e| format!("{}: {e}", b.display()))?
+        .to_rgb8();
+    if ia.dimensions() != ib.dimensions() {
+        return Err(format!(
+            "size {:?} vs reference {:?}",
+            ia.dimensions(),
+            ib.dimensions()
+        ));
+    }
+    let mut sum = 0u64;
+    let mut off = 0u64;
+    for (pa, pb) in ia.pixels().zip(ib.pixels()) {
+        let mut worst = 0;
+        for c in 0..3 {
+            let d = (pa[c] as i32 - pb[c] as i32).unsigned_abs();
+            sum += d as u64;
+            worst = worst.max(d);
+        }
+        if worst > 24 {
+            off += 1;
+        }
+    }
+    let n = (ia.width() * ia.height()) as f64;
+    Ok(Diff {
+        mean_abs: sum as f64 / (3.0 * n),
+        frac_off: off as f64 / n,
+    })
+}
+
+/// One handout command line, with the images it writes.
+pub struct CmdLine {
+    /// The line as written.
+    pub text: String,
+    /// Its arguments after `raytracer`.
+    pub args: Vec<String>,
+    /// Output file names the line names (colour, depth, normals).
+    pub outputs: Vec<String>,
+}
+
+/// The lines of `commands/<file>` that write at least one image.
+pub fn command_lines(file: &str) -> Vec<CmdLine> {
+    let text = std::fs::read_to_string(Path::new(SCENES).join("commands").join(file))
+        .expect("command file");
+    text.lines()
+        .filter_map(|l| {
+            let args: Vec<String> = l.split_whitespace().skip(1).map(String::from).collect();
+            let mut outputs = Vec::new();
+            for (i, a) in args.iter().enumerate() {
+                match a.as_str() {
+                    "-output" | "-normals" => outputs.push(args[i + 1].clone()),
+                    "-depth" => outputs.push(args[i + 3].clone()),
+                    _ => {}
+                }
+            }
+            (!outputs.is_empty()).then(|| CmdLine {
+                text: l.trim().to_string(),
+                args,
+                outputs,
+            })
+        })
+        .collect()
+}
+
+/// Runs `raytracer` with `args`, reading the scene from the shared folder and
+/// writing into `out_dir`. Returns stderr on failure.
+pub fn run_raytracer(args: &[String], out_dir: &Path) -> Result<(), String> {
+    let scenes = std::fs::canonicalize(SCENES).expect("shared scenes folder");
+    let mut args = args.to_vec();
+    if let Some(i) = args.iter().position(|a| a == "-input") {
+        args[i + 1] = scenes.join(&args[i + 1]).to_string_lossy().into_owned();
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(&args)
+        .current_dir(out_dir)
+        .output()
+        .map_err(|e| e.to_string())?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(String::from_utf8_lossy(&out.stderr).into_owned())
+    }
+}
+
+/// A fresh, empty scratch folder for one test.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("glint-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The reference PNG for an output named `name` (`output1_01.tga` → `output1_01.png`).
+pub fn reference_for(name: &str) -> PathBuf {
+    Path::new(REFERENCE).join(Path::new(name).with_extension("png"))
+}
