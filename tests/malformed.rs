@@ -210,8 +210,12 @@ fn every_fixture_is_in_the_table() {
 fn render_shows_the_line_and_a_caret() {
     let err = load_scene(&fixture("unknown_keyword.txt")).unwrap_err();
     let r = err.render();
-    assert!(r.starts_with("error: expected an object"), "{r}");
-    assert!(r.contains("unknown_keyword.txt:16:5"), "{r}");
+    let first = r.lines().next().unwrap();
+    assert!(
+        first.contains("unknown_keyword.txt:16:5: expected an object"),
+        "{r}"
+    );
+    assert!(first.ends_with("found 'Sphre'"), "{r}");
     assert!(
         r.contains("16 |     Sphre { center 0 0 0 radius 1 }\n"),
         "{r}"

@@ -70,15 +70,10 @@ impl ParseError {
     /// The message, then the source line with the offending token underlined,
     /// laid out like rustc's diagnostics.
     pub fn render(&self) -> String {
-        let mut out = format!("error: expected {}, found {}\n", self.expected, self.found);
+        // The first line is the plain `file:line:col: expected X, found Y`
+        // that editors and scripts parse; the snippet below is for people.
+        let mut out = format!("{self}\n");
         let gutter = " ".repeat(self.line.to_string().len());
-        let _ = writeln!(
-            out,
-            "{gutter}--> {}:{}:{}",
-            self.file.display(),
-            self.line,
-            self.col
-        );
         let Some(text) = self.source_line.as_deref().filter(|_| self.line > 0) else {
             return out;
         };

@@ -1,0 +1,188 @@
+//! The binaries as a user meets them: exit statuses, messages, every shared
+//! scene rendering, output formats.
+
+mod common;
+use common::*;
+use std::path::Path;
+use std::process::Command;
+
+fn raytracer(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn abs(p: &str) -> String {
+    std::fs::canonicalize(p)
+        .unwrap()
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+fn malformed_scenes_exit_2_with_position_and_no_panic() {
+    let dir = scratch("malformed");
+    for (file, pos) in [
+        ("truncated.txt", ":18:15: expected a number"),
+        ("too_many_objects.txt", ":18:5: expected 2 objects"),
+        ("unknown_keyword.txt", ": expected"),
+        ("missing_mesh.txt", "a readable OBJ file"),
+        ("material_index_out_of_range.txt", ": expected"),
+        ("bad_number.txt", ": expected a number"),
+        ("binary.txt", ": expected"),
+        ("empty.txt", ":1:1: expected"),
+    ] {
+        let input = abs(&format!("tests/malformed/{file}"));
+        let out = raytracer(
+            &["-input", &input, "-size", "10", "10", "-output", "x.png"],
+            &dir,
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{file}: {err}");
+        assert!(err.contains(pos), "{file}: message lacks {pos:?}: {err}");
+        assert!(!err.contains("panicked"), "{file}: {err}");
+        assert!(
+            !dir.join("x.png").exists(),
+            "{file}: wrote an image for bad input"
+        );
+    }
+}
+
+#[test]
+fn glint_render_reports_bad_input_with_status_2() {
+    let dir = scratch("glint-bad");
+    let input = abs("tests/malformed/too_few_objects.txt");
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["render", &input, "-o", "x.png"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("too_few_objects.txt:18:1: expected 3 objects"),
+        "{err}"
+    );
+    assert!(err.contains('^'), "no caret under the column: {err}");
+}
+
+#[test]
+fn unknown_flag_is_named_and_preview_flags_are_ignored() {
+    let dir = scratch("flags");
+    let scene = abs(&format!("{SCENES}/scene1_01.txt"));
+    let out = raytracer(&["-input", &scene, "-frobnicate"], &dir);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("-frobnicate"));
+
+    let out = raytracer(
+        &[
+            "-input",
+            &scene,
+            "-size",
+            "20",
+            "20",
+            "-output",
+            "a.png",
+            "-gui",
+            "-tessellation",
+            "10",
+            "5",
+            "-gouraud",
+        ],
+        &dir,
+    );
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "one line on stderr: {err}");
+    assert!(err.contains("-gui") && err.contains("-gouraud"));
+    assert!(dir.join("a.png").exists());
+}
+
+#[test]
+fn every_output_format_by_extension() {
+    let dir = scratch("formats");
+    let scene = abs(&format!("{SCENES}/scene2_01_diffuse.txt"));
+    for ext in ["png", "tga", "ppm", "bmp"] {
+        let name = format!("out.{ext}");
+        let out = raytracer(
+            &["-input", &scene, "-size", "40", "30", "-output", &name],
+            &dir,
+        );
+        assert!(
+            out.status.success(),
+            "{ext}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let img = image::open(dir.join(&name)).unwrap();
+        assert_eq!((img.width(), img.height()), (40, 30), "{ext}");
+    }
+    let out = raytracer(
+        &["-input", &scene, "-size", "4", "4", "-output", "out.xyz"],
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let out = raytracer(
+        &[
+            "-input",
+            &scene,
+            "-size",
+            "4",
+            "4",
+            "-output",
+            "no/such/dir/out.png",
+        ],
+        &dir,
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("does not exist"));
+}
+
+#[test]
+fn glint_info_counts_the_scene() {
+    let scene = abs(&format!("{SCENES}/scene6_07_bunny_mesh_40k.txt"));
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["info", &scene])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("40000 triangles"), "{text}");
+    assert!(text.contains("bounds"), "{text}");
+}
+
+/// Every scene of the course renders (small, all features on) without error,
+/// and no pixel is NaN or infinite.
+#[test]
+fn every_shared_scene_renders_with_finite_pixels() {
+    use glint::job::Job;
+    let mut names: Vec<_> = std::fs::read_dir(SCENES)
+        .unwrap()
+        .filter_map(|e| {
+            let p = e.unwrap().path();
+            (p.extension().is_some_and(|x| x == "txt")
+                && p.file_name()
+                    .unwrap()
+                    .to_string_lossy()
+                    .starts_with("scene"))
+            .then_some(p)
+        })
+        .collect();
+    names.sort();
+    assert!(names.len() >= 90, "only {} scenes found", names.len());
+    for path in names {
+        let mut job = Job::new(path.clone(), 24, 24);
+        job.integrator.shadows = true;
+        job.integrator.shade_back = true;
+        job.integrator.bounces = 3;
+        job.integrator.weight_cutoff = 0.01;
+        let report = job
+            .run()
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(
+            report.frame.color.iter().all(|c| c.is_finite()),
+            "{}: non-finite pixel",
+            path.display()
+        );
+    }
+}

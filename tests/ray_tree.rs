@@ -1,0 +1,295 @@
+//! Properties of the Whitted ray tree on hand-built and shared scenes:
+//! no self-intersection acne, the bounce and weight limits, shadows.
+
+mod common;
+use common::SCENES;
+use glint::format::load_scene;
+use glint::integrator::{NoObserver, RayKind, RayRecorder, Whitted};
+use glint::math::{offset_origin, Ray, Vec2, Vec3};
+use glint::render::{render, CameraModel, PixelOffset};
+use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape};
+use glint::stats::Counters;
+use glint::world::{BuildOptions, World};
+
+/// A tiny deterministic generator (xorshift), so failures reproduce.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn dir(&mut self) -> Vec3 {
+        loop {
+            let v = Vec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;
+            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+}
+
+/// From random eye-ray hits on shared scenes (meshes, spheres, planes, under
+/// transforms), rays leaving the surface on either side never re-hit the same
+/// primitive immediately (which is what shadow/reflection acne is).
+#[test]
+fn secondary_rays_never_rehit_their_own_surface() {
+    let mut rng = Rng(0x9e3779b97f4a7c15);
+    let mut checked = 0;
+    for name in [
+        "scene4_14_faceted_gem.txt",
+        "scene2_13_rotated_squashed_sphere.txt",
+        "scene4_06_transparent_bars.txt",
+        "scene6_07_bunny_mesh_40k.txt",
+        "scene4_03_mirrored_floor.txt",
+    ] {
+        let scene = load_scene(&std::path::Path::new(SCENES).join(name)).unwrap();
+        let world = World::build(&scene, BuildOptions::default());
+        let cam = CameraModel::new(&scene.camera);
+        let mut c = Counters::default();
+        for _ in 0..400 {
+            let s = Vec2::new(rng.next(), rng.next());
+            let Some(h) = world.intersect(&cam.ray(s), cam.tmin(), f32::INFINITY, &mut c) else {
+                continue;
+            };
+            for _ in 0..8 {
+                let d = rng.dir();
+                let r = Ray::new(offset_origin(h.point, h.normal, d), d);
+                if let Some(h2) = world.intersect(&r, 0.0, f32::INFINITY, &mut c) {
+                    let flat = !matches!(
+                        world.prims[h.prim as usize].shape,
+                        glint::shape::Shape::Sphere(_) | glint::shape::Shape::Transformed(_)
+                    );
+                    assert!(
+                        !(h2.prim == h.prim && (flat || h2.t < 1e-3)),
+                        "{name}: ray from {:?} re-hit its own primitive at t = {}",
+                        h.point,
+                        h2.t
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 5000, "only {checked} rays checked");
+}
+
+fn sphere(center: Vec3, radius: f32, material: usize) -> Node {
+    Node::Shape {
+        shape: Shape::Sphere { center, radius },
+        material: Some(material),
+    }
+}
+
+fn floor_scene(glass: Phong) -> Scene {
+    Scene {
+        camera: Camera::Orthographic {
+            center: Vec3::new(0.0, 5.0, 0.0),
+            direction: Vec3::NEG_Y,
+            up: Vec3::Z,
+            size: 4.0,
+        },
+        lights: vec![Light::Directional {
+            direction: Vec3::NEG_Y,
+            color: Vec3::ONE,
+        }],
+        background: Background {
+            color: Vec3::ZERO,
+            ambient: Vec3::splat(0.1),
+        },
+        materials: vec![
+            Material::Phong(Phong {
+                diffuse: Vec3::splat(0.8),
+                ..Phong::default()
+            }),
+            Material::Phong(glass),
+        ],
+        root: Node::Group(vec![
+            Node::Shape {
+                shape: Shape::Plane {
+                    normal: Vec3::Y,
+                    offset: 0.0,
+                },
+                material: Some(0),
+            },
+            sphere(Vec3::new(0.0, 2.0, 0.0), 0.5, 1),
+        ]),
+    }
+}
+
+/// Colour of the floor straight below the sphere, seen from the side so the
+/// eye ray does not pass through the sphere.
+fn floor_below_sphere(scene: &Scene, w: Whitted) -> Vec3 {
+    let world = World::build(scene, BuildOptions::default());
+    let eye = Ray::new(
+        Vec3::new(0.0, 0.1, 3.0),
+        Vec3::new(0.0, -0.1, -3.0).normalize(),
+    );
+    let (c, hit) = w.trace(
+        &world,
+        &eye,
+        0.0,
+        RayKind::Primary,
+        0,
+        1.0,
+        &mut Counters::default(),
+        &mut NoObserver,
+    );
+    assert!(
+        hit.unwrap().point.length() < 1e-3,
+        "the eye ray should hit the floor at the origin"
+    );
+    c
+}
+
+#[test]
+fn opaque_and_transparent_shadows() {
+    let glass = Phong {
+        diffuse: Vec3::ZERO,
+        transparent: Vec3::new(0.5, 0.25, 1.0),
+        ior: 1.0,
+        ..Phong::default()
+    };
+    let scene = floor_scene(glass);
+    let lit = floor_below_sphere(&scene, Whitted::default());
+    let opaque = floor_below_sphere(
+        &scene,
+        Whitted {
+            shadows: true,
+            ..Whitted::default()
+        },
+    );
+    let filtered = floor_below_sphere(
+        &scene,
+        Whitted {
+            shadows: true,
+            transparent_shadows: true,
+            ..Whitted::default()
+        },
+    );
+    let ambient = Vec3::splat(0.1 * 0.8);
+    assert!(
+        (lit - (ambient + Vec3::splat(0.8))).length() < 1e-5,
+        "{lit}"
+    );
+    // The course: any object between blocks the light, transparent or not.
+    assert!((opaque - ambient).length() < 1e-5, "{opaque}");
+    // Two surfaces of the sphere each filter by transparentColor.
+    let through = Vec3::new(0.25, 0.0625, 1.0) * 0.8;
+    assert!(
+        (filtered - (ambient + through)).length() < 1e-4,
+        "{filtered}"
+    );
+}
+
+fn mirror_box() -> Scene {
+    // Two facing mirrors: an eye ray between them bounces forever unless limited.
+    let mirror = Phong {
+        diffuse: Vec3::splat(0.1),
+        reflective: Vec3::splat(0.5),
+        ..Phong::default()
+    };
+    let mut scene = floor_scene(mirror);
+    scene.root = Node::Group(vec![
+        Node::Shape {
+            shape: Shape::Plane {
+                normal: Vec3::X,
+                offset: -1.0,
+            },
+            material: Some(1),
+        },
+        Node::Shape {
+            shape: Shape::Plane {
+                normal: Vec3::NEG_X,
+                offset: -1.0,
+            },
+            material: Some(1),
+        },
+    ]);
+    scene
+}
+
+fn count_reflections(w: Whitted) -> (u32, Vec3) {
+    let scene = mirror_box();
+    let world = World::build(&scene, BuildOptions::default());
+    let mut rec = RayRecorder::default();
+    let eye = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.2).normalize());
+    let (c, _) = w.trace(
+        &world,
+        &eye,
+        0.0,
+        RayKind::Primary,
+        0,
+        1.0,
+        &mut Counters::default(),
+        &mut rec,
+    );
+    let n = rec
+        .rays
+        .iter()
+        .filter(|r| r.kind == RayKind::Reflected)
+        .count() as u32;
+    (n, c)
+}
+
+#[test]
+fn bounces_limit_the_depth_of_the_tree() {
+    for b in 0..6 {
+        let (n, _) = count_reflections(Whitted {
+            bounces: b,
+            ..Whitted::default()
+        });
+        assert_eq!(n, b, "bounces {b}");
+    }
+}
+
+#[test]
+fn weight_cutoff_prunes_faint_branches() {
+    // Each bounce halves the weight: 0.5, 0.25, 0.125, 0.0625 ...
+    let (n, _) = count_reflections(Whitted {
+        bounces: 20,
+        weight_cutoff: 0.1,
+        ..Whitted::default()
+    });
+    assert_eq!(n, 3);
+    let (n, _) = count_reflections(Whitted {
+        bounces: 20,
+        weight_cutoff: 0.0,
+        ..Whitted::default()
+    });
+    assert_eq!(n, 20);
+}
+
+#[test]
+fn back_faces_are_black_unless_shade_back() {
+    // The camera inside a sphere sees its inside: black by default, lit with shade_back.
+    let mut scene = floor_scene(Phong::default());
+    scene.camera = Camera::Perspective {
+        center: Vec3::ZERO,
+        direction: Vec3::NEG_Z,
+        up: Vec3::Y,
+        angle_deg: 30.0,
+    };
+    scene.lights = vec![Light::Point {
+        position: Vec3::ZERO,
+        color: Vec3::ONE,
+        attenuation: Vec3::X,
+    }];
+    scene.root = sphere(Vec3::ZERO, 3.0, 0);
+    let world = World::build(&scene, BuildOptions::default());
+    let cam = CameraModel::new(&scene.camera);
+    let px = |w: &Whitted| {
+        let (f, _) = render(&world, &cam, w, (3, 3), PixelOffset::CENTER);
+        f.color[4]
+    };
+    assert_eq!(px(&Whitted::default()), Vec3::ZERO);
+    let lit = px(&Whitted {
+        shade_back: true,
+        ..Whitted::default()
+    });
+    assert!(
+        (lit - Vec3::splat(0.1 * 0.8 + 0.8)).length() < 1e-4,
+        "{lit}"
+    );
+}
