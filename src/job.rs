@@ -4,11 +4,13 @@
 use crate::format::{load_scene, ParseError};
 use crate::integrator::Whitted;
 use crate::output::{write_rgb, OutputError};
-use crate::render::{render, CameraModel, Frame, PixelOffset};
+use crate::render::{render_with, CameraModel, Control, Frame, PixelOffset};
 use crate::scene::Scene;
 use crate::stats::Counters;
 use crate::world::{BuildOptions, World};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use thiserror::Error;
 
@@ -35,6 +37,11 @@ pub struct Job {
     pub threads: Option<usize>,
     /// Where in the pixel the eye ray goes.
     pub pixel_offset: PixelOffset,
+    /// Set by a Ctrl-C handler: stop, and save what was rendered as
+    /// `NAME.partial.EXT`.
+    pub cancel: Option<Arc<AtomicBool>>,
+    /// Draw a progress bar with ETA on stderr.
+    pub progress: bool,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -52,6 +59,48 @@ pub enum JobError {
     /// Anything else (thread pool creation, ...).
     #[error("{0}")]
     Internal(String),
+    /// Stopped by the user; what was rendered is in these files.
+    #[error("interrupted: saved the rows rendered so far to {}", list(.0))]
+    Interrupted(Vec<PathBuf>),
+}
+
+fn list(paths: &[PathBuf]) -> String {
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    if names.is_empty() {
+        "no file (no output was requested)".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// `out.png` → `out.partial.png`: where an interrupted render is saved, so
+/// the file the user asked for is never replaced by an incomplete image.
+pub fn partial_path(p: &Path) -> PathBuf {
+    let stem = p
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = match p.extension() {
+        Some(ext) => format!("{stem}.partial.{}", ext.to_string_lossy()),
+        None => format!("{stem}.partial"),
+    };
+    p.with_file_name(name)
+}
+
+/// Installs a Ctrl-C handler that sets the returned flag; a second Ctrl-C
+/// exits at once (status 130) for a user who does not want to wait.
+pub fn interrupt_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    // Failing to install (e.g. a handler exists already) only loses the
+    // graceful stop; rendering itself is unaffected.
+    let _ = ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupt: finishing the rows in flight, then saving a partial image (Ctrl-C again to quit now)");
+    });
+    flag
 }
 
 impl JobError {
@@ -60,6 +109,7 @@ impl JobError {
         match self {
             JobError::Parse(_) | JobError::Usage(_) => 2,
             JobError::Output(_) | JobError::Internal(_) => 1,
+            JobError::Interrupted(_) => 130,
         }
     }
 }
@@ -97,6 +147,8 @@ impl Job {
             build: BuildOptions::default(),
             threads: None,
             pixel_offset: PixelOffset::CENTER,
+            cancel: None,
+            progress: false,
         }
     }
 
@@ -115,26 +167,55 @@ impl Job {
             .num_threads(self.threads.unwrap_or(0))
             .build()
             .map_err(|e| JobError::Internal(e.to_string()))?;
+        let bar = self.progress.then(|| progress_bar(self.height));
+        let tick = || {
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
+        };
+        let control = Control {
+            cancel: self.cancel.as_deref(),
+            on_row: Some(&tick),
+        };
         let start = Instant::now();
         let (frame, counters) = pool.install(|| {
-            render(
+            render_with(
                 &world,
                 &camera,
                 &self.integrator,
                 (self.width, self.height),
                 self.pixel_offset,
+                control,
             )
         });
         let render_time = start.elapsed();
+        if let Some(b) = bar {
+            b.finish_and_clear();
+        }
+        let complete = frame.is_complete();
         let (w, h) = (self.width, self.height);
+        let mut written = Vec::new();
+        let mut write = |out: &PathBuf, pixels: &[crate::math::Vec3]| -> Result<(), JobError> {
+            let out = if complete {
+                out.clone()
+            } else {
+                partial_path(out)
+            };
+            write_rgb(&out, w, h, pixels)?;
+            written.push(out);
+            Ok(())
+        };
         if let Some(out) = &self.output {
-            write_rgb(out, w, h, &frame.color)?;
+            write(out, &frame.color)?;
         }
         if let Some((t0, t1, out)) = &self.depth {
-            write_rgb(out, w, h, &frame.depth_image(*t0, *t1))?;
+            write(out, &frame.depth_image(*t0, *t1))?;
         }
         if let Some(out) = &self.normals {
-            write_rgb(out, w, h, &frame.normals_image())?;
+            write(out, &frame.normals_image())?;
+        }
+        if !complete {
+            return Err(JobError::Interrupted(written));
         }
         Ok(Report {
             scene,
@@ -146,6 +227,16 @@ impl Job {
             frame,
         })
     }
+}
+
+fn progress_bar(rows: u32) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(rows as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{bar:40} {percent:>3}% rows {pos}/{len}  elapsed {elapsed}  eta {eta}",
+    ) {
+        bar.set_style(style);
+    }
+    bar
 }
 
 impl Report {

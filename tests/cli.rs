@@ -186,3 +186,45 @@ fn every_shared_scene_renders_with_finite_pixels() {
         );
     }
 }
+
+/// Ctrl-C during a long render: the process stops, saves the rows it has as
+/// `NAME.partial.EXT`, says so, and leaves an existing `NAME.EXT` untouched.
+#[test]
+fn sigint_saves_a_partial_image_and_keeps_the_original() {
+    let dir = scratch("sigint");
+    let original = b"not really a png, but precious".to_vec();
+    std::fs::write(dir.join("out.png"), &original).unwrap();
+    let scene = abs(&format!("{SCENES}/scene4_14_faceted_gem.txt"));
+    // Big enough to run for many seconds on any machine.
+    let child = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args([
+            "-input", &scene, "-size", "3000", "3000", "-output", "out.png",
+        ])
+        .args([
+            "-shadows",
+            "-shade_back",
+            "-bounces",
+            "8",
+            "-weight",
+            "0.0001",
+            "-quiet",
+        ])
+        .current_dir(&dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("out.partial.png"), "{err}");
+    assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), original);
+    let partial = image::open(dir.join("out.partial.png")).unwrap();
+    assert_eq!((partial.width(), partial.height()), (3000, 3000));
+    let _ = std::fs::remove_dir_all(&dir);
+}

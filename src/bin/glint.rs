@@ -3,6 +3,7 @@
 use clap::{Args, Parser, Subcommand};
 use glint::format::load_scene;
 use glint::job::Job;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -59,6 +60,9 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
     /// Also write a depth image: near, far, file.
     #[arg(long, num_args = 3, value_names = ["T0", "T1", "FILE"])]
     depth: Option<Vec<String>>,
@@ -84,6 +88,8 @@ fn render(a: RenderArgs) -> ExitCode {
     job.integrator.transparent_shadows = a.transparent_shadows;
     job.integrator.shade_back = a.shade_back;
     job.threads = a.threads;
+    job.progress = !a.quiet && std::io::stdout().is_terminal();
+    job.cancel = Some(glint::job::interrupt_flag());
     job.normals = a.normals;
     if let Some(d) = a.depth {
         let (Ok(t0), Ok(t1)) = (d[0].parse(), d[1].parse()) else {

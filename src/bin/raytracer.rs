@@ -3,18 +3,20 @@
 
 use glint::job::Job;
 use glint::render::PixelOffset;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let (job, stats) = match parse(&args) {
+    let (mut job, stats) = match parse(&args) {
         Ok(j) => j,
         Err(msg) => {
             eprintln!("raytracer: {msg}");
             return ExitCode::from(2);
         }
     };
+    job.cancel = Some(glint::job::interrupt_flag());
     match job.run() {
         Ok(report) => {
             if stats {
@@ -39,6 +41,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
     let mut input = None;
     let mut stats = false;
     let mut ignored = Vec::new();
+    let mut quiet = false;
     while let Some(flag) = it.next() {
         let mut value = |what: &str| -> Result<&String, String> {
             it.next().ok_or_else(|| format!("{flag} expects {what}"))
@@ -63,6 +66,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             "-weight" => job.integrator.weight_cutoff = number(flag, value("a weight")?)?,
             "-stats" => stats = true,
             "-threads" => job.threads = Some(number(flag, value("a count")?)?),
+            "-quiet" => quiet = true,
             other => match PREVIEW_ONLY.iter().find(|(f, _)| *f == other) {
                 Some((f, n)) => {
                     for _ in 0..*n {
@@ -81,6 +85,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
         );
     }
     job.input = input.ok_or("missing -input SCENE")?;
+    job.progress = !quiet && std::io::stdout().is_terminal();
     Ok((job, stats))
 }
 

@@ -14,6 +14,9 @@ pub struct Frame {
     pub depth: Vec<f32>,
     /// Unit normal at the eye ray's hit (zero for a miss).
     pub normal: Vec<Vec3>,
+    /// Per row (top first): whether it was rendered (a cancelled render
+    /// leaves rows out).
+    pub complete: Vec<bool>,
 }
 
 impl Frame {
@@ -26,7 +29,13 @@ impl Frame {
             color: vec![Vec3::ZERO; n],
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
+            complete: vec![false; height as usize],
         }
+    }
+
+    /// Whether every row was rendered.
+    pub fn is_complete(&self) -> bool {
+        self.complete.iter().all(|&c| c)
     }
 
     /// The depth image for the range `[t0, t1]` (near = white).

@@ -12,6 +12,22 @@ use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
 use crate::world::World;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// How a caller steers a running render: stop it early, watch its progress.
+#[derive(Default, Clone, Copy)]
+pub struct Control<'a> {
+    /// When set (e.g. by a Ctrl-C handler), rows not yet started are skipped.
+    pub cancel: Option<&'a AtomicBool>,
+    /// Called once per finished row, from the worker threads.
+    pub on_row: Option<&'a (dyn Fn() + Sync)>,
+}
+
+impl Control<'_> {
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
 
 /// Where in each pixel the single eye ray goes.
 ///
@@ -38,6 +54,26 @@ pub fn render(
     (width, height): (u32, u32),
     offset: PixelOffset,
 ) -> (Frame, Counters) {
+    render_with(
+        world,
+        camera,
+        integrator,
+        (width, height),
+        offset,
+        Control::default(),
+    )
+}
+
+/// [`render`] under a [`Control`]. Rows skipped after a cancel stay black and
+/// are listed in [`Frame::complete`] as `false`.
+pub fn render_with(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &Whitted,
+    (width, height): (u32, u32),
+    offset: PixelOffset,
+    control: Control,
+) -> (Frame, Counters) {
     let mut frame = Frame::new(width, height);
     let w = width as usize;
     let counters = frame
@@ -45,9 +81,13 @@ pub fn render(
         .par_chunks_mut(w)
         .zip(frame.depth.par_chunks_mut(w))
         .zip(frame.normal.par_chunks_mut(w))
+        .zip(frame.complete.par_iter_mut())
         .enumerate()
-        .map(|(row, ((color, depth), normal))| {
+        .map(|(row, (((color, depth), normal), complete))| {
             let mut c = Counters::default();
+            if control.cancelled() {
+                return c;
+            }
             // Row 0 of the frame is the top of the image; screen j grows upwards.
             let j = height - 1 - row as u32;
             for i in 0..width {
@@ -69,6 +109,10 @@ pub fn render(
                     depth[k] = h.t;
                     normal[k] = h.normal;
                 }
+            }
+            *complete = true;
+            if let Some(f) = control.on_row {
+                f();
             }
             c
         })
