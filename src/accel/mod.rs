@@ -1,10 +1,45 @@
 //! Aggregates: structures that find the closest hit among many primitives.
 //! Every accelerator implements [`Aggregate`]; [`Brute`] is the baseline and
 //! the oracle the property tests compare the others with.
+//!
+//! | module      | structure                                   | traversal                     |
+//! |-------------|---------------------------------------------|-------------------------------|
+//! | `brute`     | a list                                      | test everything               |
+//! | [`grid`]    | uniform grid, cells as offsets + flat list  | 3DDDA, an iterator of cells   |
+//! | [`octree`]  | adaptive grid, primitives in the leaves     | front-to-back, an iterator of leaves |
+//! | [`bvh`]     | binary BVH (midpoint, median or binned SAH) | stack, nearer child first     |
+//!
+//! Three rules every accelerator follows, so that each returns *exactly* the
+//! hit brute force returns:
+//! - **The closest hit is kept across cells.** A primitive tested in one cell
+//!   can hit beyond that cell; the hit is kept as the current best (and shrinks
+//!   the ray's `tmax`), and the walk stops only once the best hit lies inside
+//!   the cell just finished (`t <= t_exit`). A hit beyond the cell is thus
+//!   "not accepted yet", and the mailbox never hides a primitive whose hit
+//!   was found early.
+//! - **Boxes are padded** by a margin relative to the scene's magnitude
+//!   (`overlap::margin`), so that a hit the shape test reports a few ulps
+//!   outside its exact box (a triangle lying in a cell's face, a ray grazing a
+//!   shared edge) is still inside every box and cell the traversal looks at.
+//! - **Cell intervals are computed in `t`**, from the split planes, with one
+//!   formula for the start cell and for every step, so consecutive cells share
+//!   their boundary `t` exactly and none is skipped.
 
 mod brute;
+pub mod bvh;
+pub mod grid;
+mod kind;
+mod mailbox;
+pub mod octree;
+mod overlap;
+#[cfg(test)]
+mod testutil;
 
 pub use brute::Brute;
+pub use bvh::Bvh;
+pub use grid::Grid;
+pub use kind::{AccelKind, ParseAccelError, Split};
+pub use octree::Octree;
 
 use crate::math::{Aabb, Ray};
 use crate::stats::Counters;
@@ -48,12 +83,4 @@ pub trait Aggregate: Send + Sync {
 
     /// Name and parameters, for statistics (`"bvh-sah"`, `"grid 10x10x7"`).
     fn describe(&self) -> String;
-}
-
-/// Which aggregate to build.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum AccelKind {
-    /// Test every primitive.
-    #[default]
-    None,
 }

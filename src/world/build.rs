@@ -7,7 +7,7 @@
 //! sphere under non-uniform scale) keeps a [`Transformed`] wrapper.
 
 use super::{Primitive, World};
-use crate::accel::{AccelKind, Aggregate, Brute};
+use crate::accel::{AccelKind, Aggregate, Brute, Bvh, Grid, Octree};
 use crate::math::{Mat4, Vec3};
 use crate::scene::{Material, Node, Phong, Scene, Shape as Desc};
 use crate::shape::{Plane, Shape, Sphere, Transformed, Triangle};
@@ -64,6 +64,9 @@ impl World {
 fn build_aggregate(kind: AccelKind, prims: &[Primitive], ids: Vec<u32>) -> Box<dyn Aggregate> {
     match kind {
         AccelKind::None => Box::new(Brute::new(prims, ids)),
+        AccelKind::Grid { res } => Box::new(Grid::new(prims, ids, res)),
+        AccelKind::Octree => Box::new(Octree::new(prims, ids)),
+        AccelKind::Bvh(split) => Box::new(Bvh::new(prims, ids, split)),
     }
 }
 

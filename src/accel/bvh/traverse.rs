@@ -1,0 +1,116 @@
+//! BVH traversal: depth-first with a small stack, the nearer child first.
+//!
+//! "Nearer" is judged by the sign of the ray's direction along the node's
+//! split axis (pbrt's rule: no extra box test to order the children). A node
+//! is skipped when the ray misses its box within `[tmin, t_best]`, so once a
+//! hit is found every box whose entry lies beyond it is skipped without
+//! descending. `nodes_visited` counts every node whose box is tested.
+
+use super::split::FORCE_MEDIAN_DEPTH;
+use super::Bvh;
+use crate::accel::PrimHit;
+use crate::math::Ray;
+use crate::stats::Counters;
+use crate::world::Primitive;
+
+/// Entries of the traversal stack: one per level at most, and the builder
+/// keeps the tree within `FORCE_MEDIAN_DEPTH + 32` levels.
+const STACK: usize = 64;
+const _: () = assert!(FORCE_MEDIAN_DEPTH + 32 <= STACK);
+
+/// Visits, front to back, the leaves whose boxes the ray enters within
+/// `[tmin, *t_limit]`; `leaf` tests a leaf's ids, may lower `*t_limit`, and
+/// returns true to stop the walk.
+#[inline]
+fn walk(
+    bvh: &Bvh,
+    ray: &Ray,
+    tmin: f32,
+    t_limit: &mut f32,
+    c: &mut Counters,
+    mut leaf: impl FnMut(&[u32], &mut f32, &mut Counters) -> bool,
+) {
+    if bvh.nodes.is_empty() {
+        return;
+    }
+    let inv = ray.dir.recip();
+    let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
+    let mut stack = [0u32; STACK];
+    let mut sp = 0;
+    let mut k = 0usize;
+    loop {
+        let n = &bvh.nodes[k];
+        c.nodes_visited += 1;
+        if n.bounds.hit(ray, inv, tmin, *t_limit).is_some() {
+            if !n.is_leaf() {
+                let (near, far) = if neg[n.axis as usize] {
+                    (n.offset, k as u32 + 1)
+                } else {
+                    (k as u32 + 1, n.offset)
+                };
+                stack[sp] = far;
+                sp += 1;
+                k = near as usize;
+                continue;
+            }
+            let start = n.offset as usize;
+            if leaf(&bvh.ids[start..start + n.count as usize], t_limit, c) {
+                return;
+            }
+        }
+        if sp == 0 {
+            return;
+        }
+        sp -= 1;
+        k = stack[sp] as usize;
+    }
+}
+
+/// Closest hit with `tmin < t < tmax`.
+pub(super) fn closest(
+    bvh: &Bvh,
+    prims: &[Primitive],
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+    c: &mut Counters,
+) -> Option<PrimHit> {
+    let mut best = None;
+    let mut t_best = tmax;
+    walk(bvh, ray, tmin, &mut t_best, c, |ids, t_best, c| {
+        for &id in ids {
+            c.intersection_tests += 1;
+            if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, *t_best) {
+                *t_best = t;
+                best = Some(PrimHit { t, prim: id });
+            }
+        }
+        false
+    });
+    best
+}
+
+/// Whether anything lies on the ray with `tmin < t < tmax`; stops at the
+/// first hit found.
+pub(super) fn any(
+    bvh: &Bvh,
+    prims: &[Primitive],
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+    c: &mut Counters,
+) -> bool {
+    let mut hit = false;
+    let mut t_limit = tmax;
+    walk(bvh, ray, tmin, &mut t_limit, c, |ids, t_limit, c| {
+        hit = ids.iter().any(|&id| {
+            c.intersection_tests += 1;
+            prims[id as usize]
+                .shape
+                .intersect(ray, tmin, *t_limit)
+                .is_some()
+        });
+        hit
+    });
+    hit
+}

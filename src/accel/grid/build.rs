@@ -1,0 +1,134 @@
+//! Building a grid: how many cells, and which primitives go in each.
+
+use super::{Grid, Lattice};
+use crate::accel::overlap::{margin, padded, shape_overlaps};
+use crate::math::Aabb;
+use crate::world::Primitive;
+
+/// Most cells per axis the automatic resolution picks: 128³ ≈ 2M cells
+/// (8 MB of offsets) is past the point where more cells pay for themselves
+/// on the scenes this tracer meets.
+const MAX_AUTO_RES: u32 = 128;
+
+/// Most cells in total, whatever the caller asked for; a larger request is
+/// scaled down uniformly so a typo on the command line cannot exhaust memory.
+const MAX_CELLS: f64 = (1u64 << 24) as f64;
+
+/// Cells per axis for `n` primitives in `bounds`.
+///
+/// Automatic: `3·∛n` cells along the longest axis, the other axes scaled by
+/// the box's aspect so cells are roughly cubes (pbrt's rule; about 27 cells
+/// per primitive for a cube-shaped scene, a few primitives per cell for
+/// surfaces); every axis ≥ 1 (a flat scene gets one layer), ≤ 128.
+pub(super) fn resolution(bounds: &Aabb, n: usize, fixed: Option<[u32; 3]>) -> [u32; 3] {
+    let res = match fixed {
+        Some(r) => r.map(|v| v.max(1)),
+        None => {
+            let ext = bounds.extent();
+            let per_unit = 3.0 * (n.max(1) as f32).cbrt() / ext.max_element();
+            [0, 1, 2].map(|a| ((ext[a] * per_unit).round() as u32).clamp(1, MAX_AUTO_RES))
+        }
+    };
+    let total: f64 = res.iter().map(|&r| r as f64).product();
+    if total <= MAX_CELLS {
+        return res;
+    }
+    let shrink = (MAX_CELLS / total).cbrt();
+    res.map(|r| ((r as f64 * shrink) as u32).max(1))
+}
+
+/// Builds the grid over `ids`.
+///
+/// Each primitive goes into every cell its (padded) box overlaps; when that
+/// is more than one cell, triangles and spheres are also checked against each
+/// cell with an exact overlap test (`overlap::shape_overlaps`), so a long
+/// diagonal triangle is not listed in the empty cells of its box. Cells are
+/// filled by counting sort of (cell, id) pairs into offsets + a flat list.
+pub(super) fn build(prims: &[Primitive], ids: &[u32], fixed: Option<[u32; 3]>) -> Grid {
+    let bounds = ids
+        .iter()
+        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+    let m = margin(&bounds);
+    let padded_bounds = if bounds.is_empty() {
+        bounds
+    } else {
+        padded(&bounds, m)
+    };
+    let res = if bounds.is_empty() {
+        [1, 1, 1]
+    } else {
+        resolution(&padded_bounds, ids.len(), fixed)
+    };
+    let lattice = Lattice::new(padded_bounds, res);
+
+    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(ids.len() * 2);
+    for &id in ids {
+        let shape = &prims[id as usize].shape;
+        let b = padded(&shape.bounds(), m);
+        let lo = [0, 1, 2].map(|a| lattice.coord(a, b.min[a]) as u32);
+        let hi = [0, 1, 2].map(|a| lattice.coord(a, b.max[a]) as u32);
+        let single = lo == hi;
+        let before = pairs.len();
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let c = [x, y, z];
+                    if single || shape_overlaps(shape, &padded(&lattice.cell_bounds(c), m)) {
+                        pairs.push((lattice.linear(c) as u32, id));
+                    }
+                }
+            }
+        }
+        if pairs.len() == before {
+            // The exact test rejected every cell (rounding at a corner): be
+            // conservative rather than lose the primitive.
+            pairs.push((lattice.linear(lo) as u32, id));
+        }
+    }
+
+    let cells = lattice.cells();
+    let mut offsets = vec![0u32; cells + 1];
+    for &(cell, _) in &pairs {
+        offsets[cell as usize + 1] += 1;
+    }
+    for k in 0..cells {
+        offsets[k + 1] += offsets[k];
+    }
+    let mut next = offsets.clone();
+    let mut items = vec![0u32; pairs.len()];
+    for &(cell, id) in &pairs {
+        items[next[cell as usize] as usize] = id;
+        next[cell as usize] += 1;
+    }
+    Grid {
+        lattice,
+        offsets,
+        items,
+        bounds,
+        mailbox: true,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    #[test]
+    fn automatic_resolution_follows_aspect() {
+        let b = Aabb::new(Vec3::ZERO, Vec3::new(4.0, 2.0, 0.0));
+        // 1000 prims: 30 cells on the long axis, 15 on the next, 1 on the flat one.
+        assert_eq!(resolution(&b, 1000, None), [30, 15, 1]);
+        let cube = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        assert_eq!(resolution(&cube, 1, None), [3, 3, 3]);
+        assert_eq!(resolution(&cube, 100_000_000, None), [128, 128, 128]);
+    }
+
+    #[test]
+    fn fixed_resolution_is_kept_but_capped() {
+        let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        assert_eq!(resolution(&b, 5, Some([1, 0, 7])), [1, 1, 7]);
+        let huge = resolution(&b, 5, Some([10_000; 3]));
+        assert!(huge.iter().map(|&r| r as f64).product::<f64>() <= MAX_CELLS);
+    }
+}

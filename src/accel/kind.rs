@@ -1,0 +1,166 @@
+//! Choosing an aggregate by name: [`AccelKind`] and its text form.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// How a BVH node's primitives are divided between its two children.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Split {
+    /// At the middle of the centroids' extent on its longest axis (cheap,
+    /// falls back to the median when everything lands on one side).
+    Midpoint,
+    /// Equal counts on either side along the longest centroid axis.
+    Median,
+    /// Binned surface-area heuristic, compared against making a leaf.
+    #[default]
+    Sah,
+}
+
+/// Which aggregate to build.
+///
+/// The default is `Bvh(Split::Sah)`. (It is written as a manual `impl
+/// Default` because `#[derive(Default)]` only accepts unit variants.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AccelKind {
+    /// Test every primitive.
+    None,
+    /// A uniform grid walked with 3DDDA.
+    Grid {
+        /// Cells per axis; `None` picks about `3·N^(1/3)` cells along the
+        /// longest axis and scales the others by the box's aspect.
+        res: Option<[u32; 3]>,
+    },
+    /// An adaptive grid: crowded cells are halved (into up to eight) again.
+    Octree,
+    /// A binary bounding-volume hierarchy.
+    Bvh(Split),
+}
+
+impl Default for AccelKind {
+    fn default() -> Self {
+        AccelKind::Bvh(Split::Sah)
+    }
+}
+
+impl AccelKind {
+    /// Every accepted name, for help texts (`grid:NxNxN` and `grid:N` are
+    /// accepted too and fix the resolution).
+    pub const NAMES: [&'static str; 7] = [
+        "none",
+        "grid",
+        "octree",
+        "bvh",
+        "bvh-sah",
+        "bvh-median",
+        "bvh-midpoint",
+    ];
+}
+
+/// A name [`AccelKind::from_str`] does not know.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown accelerator `{0}` (expected none, grid, grid:NxNxN, octree, bvh, bvh-sah, bvh-median or bvh-midpoint)"
+)]
+pub struct ParseAccelError(pub String);
+
+impl FromStr for AccelKind {
+    type Err = ParseAccelError;
+
+    /// `none | grid | octree | bvh | bvh-sah | bvh-median | bvh-midpoint`
+    /// (case-insensitive; `bvh` is `bvh-sah`), and `grid:NxNxN` or `grid:N`
+    /// for a fixed grid resolution.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let err = || ParseAccelError(s.to_string());
+        let name = s.trim().to_ascii_lowercase();
+        Ok(match name.as_str() {
+            "none" => AccelKind::None,
+            "grid" => AccelKind::Grid { res: None },
+            "octree" => AccelKind::Octree,
+            "bvh" | "bvh-sah" => AccelKind::Bvh(Split::Sah),
+            "bvh-median" => AccelKind::Bvh(Split::Median),
+            "bvh-midpoint" => AccelKind::Bvh(Split::Midpoint),
+            other => {
+                let res = other.strip_prefix("grid:").ok_or_else(err)?;
+                let n: Vec<u32> = res
+                    .split('x')
+                    .map(|v| v.trim().parse().ok().filter(|&n| n > 0))
+                    .collect::<Option<_>>()
+                    .ok_or_else(err)?;
+                let res = match n[..] {
+                    [a] => [a, a, a],
+                    [a, b, c] => [a, b, c],
+                    _ => return Err(err()),
+                };
+                AccelKind::Grid { res: Some(res) }
+            }
+        })
+    }
+}
+
+impl fmt::Display for AccelKind {
+    /// The canonical name, which [`AccelKind::from_str`] reads back.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AccelKind::None => f.write_str("none"),
+            AccelKind::Grid { res: None } => f.write_str("grid"),
+            AccelKind::Grid {
+                res: Some([x, y, z]),
+            } => write!(f, "grid:{x}x{y}x{z}"),
+            AccelKind::Octree => f.write_str("octree"),
+            AccelKind::Bvh(s) => write!(f, "bvh-{s}"),
+        }
+    }
+}
+
+impl fmt::Display for Split {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Split::Midpoint => "midpoint",
+            Split::Median => "median",
+            Split::Sah => "sah",
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_parse_and_round_trip() {
+        assert_eq!("bvh".parse(), Ok(AccelKind::Bvh(Split::Sah)));
+        assert_eq!("BVH-Median".parse(), Ok(AccelKind::Bvh(Split::Median)));
+        assert_eq!(
+            "grid:4x5x6".parse(),
+            Ok(AccelKind::Grid {
+                res: Some([4, 5, 6])
+            })
+        );
+        assert_eq!(
+            "grid:7".parse(),
+            Ok(AccelKind::Grid {
+                res: Some([7, 7, 7])
+            })
+        );
+        for name in AccelKind::NAMES {
+            let k: AccelKind = name.parse().unwrap();
+            assert_eq!(k.to_string().parse::<AccelKind>(), Ok(k));
+        }
+        let fixed = AccelKind::Grid {
+            res: Some([1, 2, 3]),
+        };
+        assert_eq!(fixed.to_string().parse::<AccelKind>(), Ok(fixed));
+    }
+
+    #[test]
+    fn bad_names_are_errors() {
+        for bad in ["kd", "grid:", "grid:0", "grid:1x2", "grid:axbxc", ""] {
+            assert!(bad.parse::<AccelKind>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn default_is_sah_bvh() {
+        assert_eq!(AccelKind::default(), AccelKind::Bvh(Split::Sah));
+    }
+}

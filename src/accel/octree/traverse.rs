@@ -1,0 +1,174 @@
+//! Walking an octree front to back: the leaves a ray crosses, in order.
+//!
+//! How the children are ordered: at an inner node the ray crosses up to three
+//! of the node's mid-planes (one per split axis) inside the node's `[t0, t1]`. The child it starts
+//! in is read off, per axis, from whether the ray is already past the
+//! mid-plane at `t0`; each crossing, in increasing `t`, flips that axis's bit
+//! of the child index. That gives up to four children, each with its own
+//! `[t_enter, t_exit]`, pushed far-first on a small stack so the nearest is
+//! popped next. The stack's top is thus always the nearest unvisited part of
+//! the ray, which is what lets the consumer stop early.
+
+use super::{child_box, slot, Node, Octree, MAX_DEPTH};
+use crate::math::{Aabb, Ray, Vec3};
+
+/// One leaf of a walk.
+#[derive(Clone, Copy, Debug)]
+pub struct Leaf<'a> {
+    /// Node index.
+    pub node: u32,
+    /// The leaf's box.
+    pub bounds: Aabb,
+    /// Depth (the root is 0).
+    pub depth: u32,
+    /// Ray parameter where the ray enters the leaf (or the walk's start).
+    pub t_enter: f32,
+    /// Ray parameter where it leaves (or the walk's end).
+    pub t_exit: f32,
+    /// Primitive ids stored in the leaf.
+    pub items: &'a [u32],
+}
+
+#[derive(Clone, Copy)]
+struct Entry {
+    node: u32,
+    depth: u32,
+    bounds: Aabb,
+    t0: f32,
+    t1: f32,
+}
+
+/// Popping a node at depth `d` pushes at most 4 children, 3 of which stay on
+/// the stack while the first is explored: `3·MAX_DEPTH + 1` entries suffice.
+const STACK: usize = 3 * MAX_DEPTH as usize + 2;
+
+/// The leaves a ray crosses within `[tmin, tmax]`, front to back.
+pub struct LeafWalk<'a> {
+    tree: &'a Octree,
+    origin: Vec3,
+    inv: Vec3,
+    /// Axes the ray does not move along (`1/dir` is not finite).
+    parallel: [bool; 3],
+    stack: [Entry; STACK],
+    len: usize,
+    /// Nodes popped so far, inner nodes and leaves (for the counters).
+    pub visited: u64,
+}
+
+impl<'a> LeafWalk<'a> {
+    pub(super) fn new(tree: &'a Octree, ray: &Ray, tmin: f32, tmax: f32) -> Self {
+        let inv = ray.dir.recip();
+        let empty = Entry {
+            node: 0,
+            depth: 0,
+            bounds: Aabb::EMPTY,
+            t0: 0.0,
+            t1: 0.0,
+        };
+        let mut w = LeafWalk {
+            tree,
+            origin: ray.origin,
+            inv,
+            parallel: [0, 1, 2].map(|a| !inv[a].is_finite()),
+            stack: [empty; STACK],
+            len: 0,
+            visited: 0,
+        };
+        if !tree.root.is_empty() {
+            if let Some((t0, t1)) = tree.root.hit(ray, inv, tmin, tmax) {
+                w.stack[0] = Entry {
+                    node: 0,
+                    depth: 0,
+                    bounds: tree.root,
+                    t0,
+                    t1,
+                };
+                w.len = 1;
+            }
+        }
+        w
+    }
+
+    /// Pushes the children of inner node `e` that the ray crosses, far first.
+    fn push_children(&mut self, e: &Entry, first: u32, axes: u8) {
+        let mid = e.bounds.center();
+        let mut child = 0usize;
+        let mut cross = [(0.0f32, 0usize); 3];
+        let mut n = 0;
+        for a in 0..3 {
+            if axes & (1 << a) == 0 {
+                continue; // not split: every child spans the node's extent
+            }
+            if self.parallel[a] {
+                if self.origin[a] >= mid[a] {
+                    child |= 1 << a;
+                }
+                continue;
+            }
+            let tm = (mid[a] - self.origin[a]) * self.inv[a];
+            // Upper half at t0: moving up and already across, or moving down
+            // and not yet across. A start exactly on the plane takes the half
+            // the ray is entering.
+            let upper = if self.inv[a] > 0.0 {
+                tm <= e.t0
+            } else {
+                tm > e.t0
+            };
+            if upper {
+                child |= 1 << a;
+            }
+            if tm > e.t0 && tm < e.t1 {
+                cross[n] = (tm, a);
+                n += 1;
+            }
+        }
+        cross[..n].sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        // Children in ray order with their intervals.
+        let mut seq = [(0usize, 0.0f32, 0.0f32); 4];
+        let mut t = e.t0;
+        for (i, &(tc, a)) in cross[..n].iter().enumerate() {
+            seq[i] = (child, t, tc);
+            t = tc;
+            child ^= 1 << a;
+        }
+        seq[n] = (child, t, e.t1);
+        for &(c, t0, t1) in seq[..=n].iter().rev() {
+            self.stack[self.len] = Entry {
+                node: first + slot(c, axes) as u32,
+                depth: e.depth + 1,
+                bounds: child_box(&e.bounds, c, axes),
+                t0,
+                t1,
+            };
+            self.len += 1;
+        }
+    }
+}
+
+impl<'a> Iterator for LeafWalk<'a> {
+    type Item = Leaf<'a>;
+
+    fn next(&mut self) -> Option<Leaf<'a>> {
+        while self.len > 0 {
+            self.len -= 1;
+            let e = self.stack[self.len];
+            self.visited += 1;
+            match self.tree.nodes[e.node as usize] {
+                Node::Inner { first, axes } => self.push_children(&e, first, axes),
+                Node::Leaf { start, count } => {
+                    let tree: &'a Octree = self.tree;
+                    let items = &tree.items[start as usize..(start + count) as usize];
+                    return Some(Leaf {
+                        node: e.node,
+                        bounds: e.bounds,
+                        depth: e.depth,
+                        t_enter: e.t0,
+                        t_exit: e.t1,
+                        items,
+                    });
+                }
+            }
+        }
+        None
+    }
+}

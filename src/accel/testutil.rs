@@ -1,0 +1,123 @@
+//! Helpers for the accelerators' unit tests: random primitive soups and a
+//! comparison with brute force.
+
+use super::{Aggregate, Brute};
+use crate::math::{Ray, Vec3};
+use crate::shape::{Shape, Sphere, Triangle};
+use crate::stats::Counters;
+use crate::world::Primitive;
+
+/// A small deterministic generator (xorshift64*).
+pub(crate) struct Rng(u64);
+
+impl Rng {
+    pub(crate) fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1)
+    }
+
+    /// Uniform in [0, 1).
+    pub(crate) fn f(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
+        (x >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// 0, 1 or 2.
+    pub(crate) fn below3(&mut self) -> usize {
+        ((self.f() * 3.0) as usize).min(2)
+    }
+
+    /// Uniform in the box [lo, hi).
+    pub(crate) fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(self.f(), self.f(), self.f()) * (hi - lo) + Vec3::splat(lo)
+    }
+}
+
+pub(crate) fn prim(shape: Shape) -> Primitive {
+    Primitive {
+        shape,
+        material: 0,
+        instance: 0,
+    }
+}
+
+pub(crate) fn sphere(c: Vec3, r: f32) -> Primitive {
+    prim(Shape::Sphere(Sphere {
+        center: c,
+        radius: r,
+    }))
+}
+
+/// `n` small triangles and `n / 4` spheres scattered in [-5, 5]³.
+pub(crate) fn soup(seed: u64, n: usize) -> Vec<Primitive> {
+    let mut r = Rng::new(seed);
+    let mut p = Vec::new();
+    for _ in 0..n {
+        let a = r.v(-5.0, 5.0);
+        p.push(prim(Shape::Triangle(Triangle::new(
+            a,
+            a + r.v(-1.0, 1.0),
+            a + r.v(-1.0, 1.0),
+        ))));
+    }
+    for _ in 0..n / 4 {
+        p.push(sphere(r.v(-5.0, 5.0), 0.1 + 0.5 * r.f()));
+    }
+    p
+}
+
+/// A random ray from around the soup, aimed through it.
+pub(crate) fn ray(r: &mut Rng) -> Ray {
+    let o = r.v(-8.0, 8.0);
+    Ray::new(o, r.v(-3.0, 3.0) - o)
+}
+
+/// Asserts that `accel` agrees with brute force on `rays` random rays, for
+/// the closest hit and for occlusion, and returns the counters it used.
+pub(crate) fn assert_agrees(accel: &dyn Aggregate, prims: &[Primitive], rays: usize) -> Counters {
+    let mut r = Rng::new(7);
+    let queries = (0..rays).map(|i| {
+        let range = if i % 3 == 0 {
+            (0.2, 0.9)
+        } else {
+            (0.0, f32::INFINITY)
+        };
+        (ray(&mut r), range.0, range.1)
+    });
+    assert_agrees_on(accel, prims, queries)
+}
+
+/// [`assert_agrees`] on given `(ray, tmin, tmax)` queries.
+pub(crate) fn assert_agrees_on(
+    accel: &dyn Aggregate,
+    prims: &[Primitive],
+    queries: impl IntoIterator<Item = (Ray, f32, f32)>,
+) -> Counters {
+    let ids = (0..prims.len() as u32).collect();
+    let brute = Brute::new(prims, ids);
+    let mut c = Counters::default();
+    let mut cb = Counters::default();
+    for (i, (ray, tmin, tmax)) in queries.into_iter().enumerate() {
+        let want = brute.intersect(prims, &ray, tmin, tmax, &mut cb);
+        let got = accel.intersect(prims, &ray, tmin, tmax, &mut c);
+        match (want, got) {
+            (None, None) => {}
+            (Some(w), Some(g)) => assert!(
+                (w.t - g.t).abs() <= 1e-4 * w.t.abs().max(1.0),
+                "ray {i}: {w:?} vs {g:?}"
+            ),
+            _ => panic!(
+                "ray {i} {ray:?}: brute {want:?}, {} {got:?}",
+                accel.describe()
+            ),
+        }
+        assert_eq!(
+            brute.occluded(prims, &ray, tmin, tmax, &mut cb),
+            accel.occluded(prims, &ray, tmin, tmax, &mut c),
+            "ray {i}"
+        );
+    }
+    c
+}

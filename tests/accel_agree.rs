@@ -1,0 +1,665 @@
+//! Every accelerator must return exactly the hit brute force returns.
+//!
+//! Deterministic random scenes (a seeded generator, so any failure is
+//! reproducible from the scene number and ray index it prints) are built as
+//! `glint::scene::Scene` trees: spheres, single triangles, shared meshes,
+//! planes, nested transforms with non-uniform scale and mirroring (so some
+//! primitives stay `Shape::Transformed`), plus the awkward cases: flat
+//! scenes, duplicated geometry, a dense cluster beside sparse objects, an
+//! axis-aligned lattice probed by axis-parallel rays along its planes, far
+//! from the origin, empty. Rays start inside and outside the bounds, with
+//! random, axis-parallel (also `-0.0` components) or aimed directions, and
+//! random `[tmin, tmax]` ranges.
+//!
+//! What "the same hit" means: the same primitive at the bit-identical `t`
+//! (the same primitive computes the same root). Different primitives are
+//! accepted only when their `t` agree within `1e-4` relative: coincident
+//! triangles (one mesh instanced twice under one transform) are a genuine tie
+//! that brute force breaks by list order and an accelerator by visit order.
+//! The occlusion answer must be identical.
+//!
+//! Each test covers one accelerator (they run in parallel) over
+//! `SCENES × RAYS_PER_SCENE` = 120,000 rays.
+
+use glint::accel::{AccelKind, Aggregate, Grid, Split};
+use glint::math::{Mat4, Ray, Vec3};
+use glint::scene::{Background, Camera, Mesh, Node, Scene, Shape};
+use glint::stats::Counters;
+use glint::world::{BuildOptions, World};
+use rayon::prelude::*;
+use std::sync::{Arc, OnceLock};
+
+const SCENES: u64 = 48;
+const RAYS_PER_SCENE: usize = 2500;
+
+/// Scenes to check: [`SCENES`], or `ACCEL_AGREE_SCENES` for a longer soak
+/// (`ACCEL_AGREE_SCENES=2000 cargo test --test accel_agree`).
+fn scene_count() -> u64 {
+    std::env::var("ACCEL_AGREE_SCENES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(SCENES)
+}
+
+/// splitmix64: tiny, deterministic, good enough for test inputs.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x1234_5678)
+    }
+    fn u(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn f(&mut self) -> f32 {
+        (self.u() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f()
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.u() % n as u64) as usize
+    }
+    fn chance(&mut self, p: f32) -> bool {
+        self.f() < p
+    }
+    fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+    fn unit(&mut self) -> Vec3 {
+        loop {
+            let v = self.v(-1.0, 1.0);
+            let l = v.length();
+            if l > 0.05 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Scenes
+
+fn shape(shape: Shape) -> Node {
+    Node::Shape {
+        shape,
+        material: None,
+    }
+}
+
+fn xf(matrix: Mat4, child: Node) -> Node {
+    Node::Transform {
+        matrix,
+        child: Box::new(child),
+    }
+}
+
+fn sphere(c: Vec3, r: f32) -> Node {
+    shape(Shape::Sphere {
+        center: c,
+        radius: r,
+    })
+}
+
+fn triangle(a: Vec3, b: Vec3, c: Vec3) -> Node {
+    shape(Shape::Triangle([a, b, c]))
+}
+
+/// A mesh of `n` random triangles over `k` shared vertices in a box of size
+/// `size` around `at` (repeated indices make a few degenerate triangles).
+fn random_mesh(r: &mut Rng, at: Vec3, size: f32, k: usize, n: usize) -> Arc<Mesh> {
+    let positions = (0..k).map(|_| at + r.v(-size, size)).collect();
+    let triangles = (0..n).map(|_| [0; 3].map(|_| r.below(k) as u32)).collect();
+    Arc::new(Mesh {
+        positions,
+        triangles,
+    })
+}
+
+/// A random affine matrix: translation, rotation, and sometimes a
+/// non-uniform scale or a mirror.
+fn random_matrix(r: &mut Rng) -> Mat4 {
+    let t = Mat4::from_translation(r.v(-4.0, 4.0));
+    let rot = Mat4::from_axis_angle(r.unit(), r.range(0.0, 6.3));
+    let scale = match r.below(4) {
+        0 => Vec3::ONE,
+        1 => Vec3::splat(r.range(0.3, 2.0)),
+        2 => Vec3::new(r.range(0.3, 2.0), r.range(0.3, 2.0), r.range(0.3, 2.0)),
+        _ => Vec3::new(-r.range(0.5, 1.5), r.range(0.5, 1.5), r.range(0.5, 1.5)),
+    };
+    t * rot * Mat4::from_scale(scale)
+}
+
+fn random_node(r: &mut Rng, depth: u32, budget: &mut usize) -> Node {
+    let pick = if depth >= 3 { r.below(4) } else { r.below(7) };
+    match pick {
+        0 => {
+            *budget = budget.saturating_sub(1);
+            sphere(r.v(-5.0, 5.0), r.range(0.05, 1.5))
+        }
+        1 => {
+            *budget = budget.saturating_sub(1);
+            let a = r.v(-5.0, 5.0);
+            let s = if r.chance(0.2) { 6.0 } else { 1.0 };
+            triangle(a, a + r.v(-s, s), a + r.v(-s, s))
+        }
+        2 | 3 => {
+            let n = 5 + r.below(60);
+            *budget = budget.saturating_sub(n);
+            let k = 3 + r.below(30);
+            let (at, size) = (r.v(-4.0, 4.0), r.range(0.3, 3.0));
+            shape(Shape::Mesh(random_mesh(r, at, size, k, n)))
+        }
+        4 | 5 => {
+            let child = random_node(r, depth + 1, budget);
+            xf(random_matrix(r), child)
+        }
+        _ => {
+            let n = 2 + r.below(4);
+            Node::Group((0..n).map(|_| random_node(r, depth + 1, budget)).collect())
+        }
+    }
+}
+
+/// Random objects, nested transforms, a plane now and then.
+fn mixed(r: &mut Rng) -> Node {
+    let mut budget = 30 + r.below(300);
+    let mut kids = Vec::new();
+    while budget > 0 {
+        kids.push(random_node(r, 0, &mut budget));
+    }
+    if r.chance(0.5) {
+        kids.push(shape(Shape::Plane {
+            normal: r.unit(),
+            offset: r.range(-6.0, 6.0),
+        }));
+    }
+    Node::Group(kids)
+}
+
+/// Everything in one plane `z = c`: the bounds have zero thickness.
+fn flat(r: &mut Rng) -> Node {
+    let z = r.range(-2.0, 2.0);
+    let n = 20 + r.below(300);
+    let mut positions = Vec::new();
+    for _ in 0..n {
+        let a = Vec3::new(r.range(-5.0, 5.0), r.range(-5.0, 5.0), z);
+        let mut near = || a + Vec3::new(r.range(-1.5, 1.5), r.range(-1.5, 1.5), 0.0);
+        positions.extend([a, near(), near()]);
+    }
+    let mesh = Mesh {
+        positions,
+        triangles: (0..n as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect(),
+    };
+    Node::Group(vec![shape(Shape::Mesh(Arc::new(mesh)))])
+}
+
+/// One mesh used three times, twice under the same matrix (exact ties), and
+/// a mesh holding each of its triangles twice.
+fn shared(r: &mut Rng) -> Node {
+    let mesh = random_mesh(r, Vec3::ZERO, 3.0, 40, 100);
+    let m = random_matrix(r);
+    let mut doubled = (*random_mesh(r, Vec3::ONE, 2.0, 20, 60)).clone();
+    doubled.triangles.extend(doubled.triangles.clone());
+    Node::Group(vec![
+        xf(m, shape(Shape::Mesh(mesh.clone()))),
+        xf(m, shape(Shape::Mesh(mesh.clone()))),
+        xf(random_matrix(r), shape(Shape::Mesh(mesh))),
+        shape(Shape::Mesh(Arc::new(doubled))),
+        sphere(Vec3::ZERO, 1.0),
+        sphere(Vec3::ZERO, 1.0),
+    ])
+}
+
+/// Many tiny triangles in a small region plus big, sparse spheres: the
+/// uniform grid's worst case, the octree's and BVH's home ground.
+fn clustered(r: &mut Rng) -> Node {
+    let at = r.v(-1.0, 1.0);
+    let mut kids = vec![shape(Shape::Mesh(random_mesh(r, at, 0.05, 200, 250)))];
+    for _ in 0..8 {
+        kids.push(sphere(r.v(-20.0, 20.0), r.range(0.5, 3.0)));
+    }
+    Node::Group(kids)
+}
+
+/// Axis-aligned unit squares on the integer planes of [0, 4]³: surfaces lie
+/// on cell and octant boundaries, and integer rays run along them.
+fn lattice(r: &mut Rng) -> Node {
+    let mut kids = Vec::new();
+    for _ in 0..60 {
+        let axis = r.below(3);
+        let mut o = [r.below(4) as f32, r.below(4) as f32, r.below(4) as f32];
+        o[axis] = r.below(5) as f32;
+        let o = Vec3::from(o);
+        let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
+        kids.push(triangle(o, o + u, o + u + v));
+        kids.push(triangle(o, o + u + v, o + v));
+    }
+    for _ in 0..5 {
+        let c = Vec3::new(r.below(5) as f32, r.below(5) as f32, r.below(5) as f32);
+        kids.push(sphere(c, 0.5));
+    }
+    Node::Group(kids)
+}
+
+fn scene(seed: u64) -> (Scene, bool) {
+    let mut r = Rng::new(seed);
+    let mut lattice_rays = false;
+    let root = match seed {
+        0 => Node::Group(vec![]),
+        1 => sphere(Vec3::ZERO, 1.0),
+        2 => shape(Shape::Plane {
+            normal: Vec3::Y,
+            offset: 0.0,
+        }),
+        _ => match seed % 6 {
+            0 | 1 => mixed(&mut r),
+            2 => flat(&mut r),
+            3 => shared(&mut r),
+            4 => clustered(&mut r),
+            _ => {
+                lattice_rays = true;
+                lattice(&mut r)
+            }
+        },
+    };
+    // Every fourth scene lives far from the origin, where ulps are coarse.
+    let root = if seed % 4 == 3 {
+        xf(
+            Mat4::from_translation(Vec3::new(1000.0, -300.0, 50.0)),
+            root,
+        )
+    } else {
+        root
+    };
+    let scene = Scene {
+        camera: Camera::Perspective {
+            center: Vec3::Z * 10.0,
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            angle_deg: 40.0,
+        },
+        lights: vec![],
+        background: Background::default(),
+        materials: vec![],
+        root,
+    };
+    (scene, lattice_rays && seed % 4 != 3)
+}
+
+// ---------------------------------------------------------------------------
+// Rays
+
+struct Query {
+    ray: Ray,
+    tmin: f32,
+    tmax: f32,
+}
+
+fn random_query(r: &mut Rng, world: &World, lattice: bool) -> Query {
+    let b = world.bounds();
+    let (lo, hi) = if b.is_empty() {
+        (Vec3::splat(-1.0), Vec3::splat(1.0))
+    } else {
+        (b.min, b.max)
+    };
+    let size = (hi - lo).max(Vec3::splat(1e-3));
+    let inside = |r: &mut Rng| lo + Vec3::new(r.f(), r.f(), r.f()) * size;
+    let axes = [
+        Vec3::X,
+        Vec3::Y,
+        Vec3::Z,
+        Vec3::NEG_X,
+        Vec3::NEG_Y,
+        Vec3::NEG_Z,
+    ];
+
+    let origin = if lattice && r.chance(0.5) {
+        // On the lattice's planes, edges and corners.
+        Vec3::new(
+            r.below(9) as f32 * 0.5,
+            r.below(9) as f32 * 0.5,
+            r.below(9) as f32 * 0.5,
+        ) + if r.chance(0.5) {
+            Vec3::ZERO
+        } else {
+            Vec3::X * -1.0
+        }
+    } else if r.chance(0.4) {
+        inside(r)
+    } else {
+        let c = 0.5 * (lo + hi);
+        c + (inside(r) - c) * r.range(1.2, 4.0)
+    };
+    let dir = match r.below(6) {
+        0 => axes[r.below(6)],
+        1 => {
+            // One component exactly zero (sometimes negative zero).
+            let mut d = r.unit();
+            d[r.below(3)] = if r.chance(0.5) { 0.0 } else { -0.0 };
+            if d == Vec3::ZERO {
+                Vec3::X
+            } else {
+                d
+            }
+        }
+        2 | 3 => {
+            let d = inside(r) - origin;
+            if d.length() > 1e-6 {
+                d * r.range(0.1, 3.0) // not unit length on purpose
+            } else {
+                Vec3::Y
+            }
+        }
+        _ => r.unit(),
+    };
+    let span = size.length() * 3.0 / dir.length();
+    let (tmin, tmax) = match r.below(5) {
+        0 => {
+            let a = r.range(0.0, span);
+            (a, a + r.range(0.0, span))
+        }
+        1 => (r.range(0.0, span), f32::INFINITY),
+        2 => (0.0, r.range(0.0, span)),
+        _ => (0.0, f32::INFINITY),
+    };
+    Query {
+        ray: Ray::new(origin, dir),
+        tmin,
+        tmax,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Comparison
+
+fn same_hit(want: Option<(u32, f32)>, got: Option<(u32, f32)>, ties: &mut usize) -> bool {
+    match (want, got) {
+        (None, None) => true,
+        (Some((wp, wt)), Some((gp, gt))) if wp == gp => wt == gt,
+        (Some((_, wt)), Some((_, gt))) => {
+            *ties += 1;
+            (wt - gt).abs() <= 1e-4 * wt.abs().max(gt.abs())
+        }
+        _ => false,
+    }
+}
+
+/// One scene with its rays and brute force's answers to them.
+struct Case {
+    seed: u64,
+    scene: Scene,
+    queries: Vec<Query>,
+    /// Closest hit (primitive, t) and occlusion, per query.
+    answers: Vec<(Option<(u32, f32)>, bool)>,
+}
+
+/// The scenes, rays and brute-force answers, computed once per flattening
+/// mode and shared by the tests (brute force is most of the work).
+fn oracle(flatten: bool) -> &'static (Vec<Case>, Counters) {
+    static FLAT: OnceLock<(Vec<Case>, Counters)> = OnceLock::new();
+    static NESTED: OnceLock<(Vec<Case>, Counters)> = OnceLock::new();
+    let cell = if flatten { &FLAT } else { &NESTED };
+    cell.get_or_init(|| {
+        let cases: Vec<(Case, Counters)> = (0..scene_count())
+            .into_par_iter()
+            .map(|seed| {
+                let (scene, lattice) = scene(seed);
+                let brute = World::build(
+                    &scene,
+                    BuildOptions {
+                        accel: AccelKind::None,
+                        flatten,
+                    },
+                );
+                let mut r = Rng::new(seed ^ 0xabcdef);
+                let mut c = Counters::default();
+                let queries: Vec<Query> = (0..RAYS_PER_SCENE)
+                    .map(|_| random_query(&mut r, &brute, lattice))
+                    .collect();
+                let answers = queries
+                    .iter()
+                    .map(|q| {
+                        let hit = brute.intersect(&q.ray, q.tmin, q.tmax, &mut c);
+                        let occ = brute.occluded(&q.ray, q.tmin, q.tmax, &mut c);
+                        (hit.map(|h| (h.prim, h.t)), occ)
+                    })
+                    .collect();
+                let case = Case {
+                    seed,
+                    scene,
+                    queries,
+                    answers,
+                };
+                (case, c)
+            })
+            .collect();
+        let mut total = Counters::default();
+        let cases = cases
+            .into_iter()
+            .map(|(case, c)| {
+                total += c;
+                case
+            })
+            .collect();
+        (cases, total)
+    })
+}
+
+/// Checks `accel` against brute force over every scene; returns the
+/// counters of both, for the cost comparison printed with `--nocapture`.
+fn check(accel: AccelKind, flatten: bool) -> (Counters, Counters) {
+    let (cases, brute_counters) = oracle(flatten);
+    let mut ca = Counters::default();
+    let mut ties = 0;
+    let mut rays = 0;
+    for case in cases {
+        let world = World::build(&case.scene, BuildOptions { accel, flatten });
+        for (i, (q, &(want, want_occ))) in case.queries.iter().zip(&case.answers).enumerate() {
+            let got = world
+                .intersect(&q.ray, q.tmin, q.tmax, &mut ca)
+                .map(|h| (h.prim, h.t));
+            assert!(
+                same_hit(want, got, &mut ties),
+                "{accel:?} (flatten {flatten}), scene {}, ray {i}: {:?} in ({}, {})\n\
+                 brute: {want:?}\n{}: {got:?}",
+                case.seed,
+                q.ray,
+                q.tmin,
+                q.tmax,
+                world.accel.describe(),
+            );
+            let got = world.occluded(&q.ray, q.tmin, q.tmax, &mut ca);
+            assert_eq!(
+                want_occ, got,
+                "{accel:?} (flatten {flatten}), scene {}, ray {i}: occlusion of {:?} in ({}, {})",
+                case.seed, q.ray, q.tmin, q.tmax
+            );
+            rays += 1;
+        }
+    }
+    assert!(rays >= 100_000 || scene_count() < SCENES);
+    println!(
+        "{accel} (flatten {flatten}): {rays} rays, {ties} ties between coincident primitives; \
+         tests/ray {:.1} (brute {:.1}), nodes/ray {:.1}",
+        ca.intersection_tests as f64 / (2 * rays) as f64,
+        brute_counters.intersection_tests as f64 / (2 * rays) as f64,
+        ca.nodes_visited as f64 / (2 * rays) as f64,
+    );
+    (ca, *brute_counters)
+}
+
+#[test]
+fn grid_automatic() {
+    let (a, b) = check(AccelKind::Grid { res: None }, true);
+    assert!(a.intersection_tests < b.intersection_tests);
+}
+
+#[test]
+fn grid_single_cell() {
+    check(
+        AccelKind::Grid {
+            res: Some([1, 1, 1]),
+        },
+        true,
+    );
+}
+
+#[test]
+fn grid_fixed_resolutions() {
+    check(
+        AccelKind::Grid {
+            res: Some([3, 5, 2]),
+        },
+        true,
+    );
+    check(
+        AccelKind::Grid {
+            res: Some([4, 4, 4]),
+        },
+        true,
+    );
+    check(
+        AccelKind::Grid {
+            res: Some([32, 1, 17]),
+        },
+        true,
+    );
+}
+
+#[test]
+fn octree() {
+    let (a, b) = check(AccelKind::Octree, true);
+    assert!(a.intersection_tests < b.intersection_tests);
+}
+
+#[test]
+fn bvh_sah() {
+    let (a, b) = check(AccelKind::Bvh(Split::Sah), true);
+    assert!(a.intersection_tests < b.intersection_tests);
+}
+
+#[test]
+fn bvh_median() {
+    check(AccelKind::Bvh(Split::Median), true);
+}
+
+#[test]
+fn bvh_midpoint() {
+    check(AccelKind::Bvh(Split::Midpoint), true);
+}
+
+/// Without flattening, triangles and spheres stay `Shape::Transformed`.
+#[test]
+fn unflattened_worlds() {
+    check(AccelKind::Bvh(Split::Sah), false);
+    check(AccelKind::Grid { res: None }, false);
+}
+
+/// Cost of each accelerator on two 10k-triangle scenes, from the counters:
+/// `cargo test --release --test accel_agree cost_report -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn cost_report() {
+    let mut r = Rng::new(99);
+    // A soup of small random triangles in a 10-unit box, and a finely
+    // tessellated sphere (a closed surface, as real meshes are).
+    let soup = random_mesh(&mut r, Vec3::ZERO, 5.0, 30_000, 0);
+    let mut soup = (*soup).clone();
+    soup.triangles = (0..10_000u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    for t in 0..10_000 {
+        let a = soup.positions[3 * t];
+        soup.positions[3 * t + 1] = a + r.v(-0.4, 0.4);
+        soup.positions[3 * t + 2] = a + r.v(-0.4, 0.4);
+    }
+    let (nu, nv) = (100u32, 50u32);
+    let mut ball = Mesh::default();
+    for j in 0..=nv {
+        for i in 0..nu {
+            let (th, ph) = (
+                std::f32::consts::PI * j as f32 / nv as f32,
+                std::f32::consts::TAU * i as f32 / nu as f32,
+            );
+            ball.positions
+                .push(4.0 * Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()));
+        }
+    }
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b) = (j * nu + i, j * nu + (i + 1) % nu);
+            ball.triangles.push([a, b + nu, b]);
+            ball.triangles.push([a, a + nu, b + nu]);
+        }
+    }
+    for (name, mesh) in [("soup", soup), ("sphere", ball)] {
+        let (sc, _) = scene(1);
+        let sc = Scene {
+            root: shape(Shape::Mesh(Arc::new(mesh))),
+            ..sc
+        };
+        let kinds = [
+            AccelKind::None,
+            AccelKind::Grid { res: None },
+            AccelKind::Octree,
+            AccelKind::Bvh(Split::Midpoint),
+            AccelKind::Bvh(Split::Median),
+            AccelKind::Bvh(Split::Sah),
+        ];
+        let mut rq = Rng::new(5);
+        let probe = World::build(&sc, BuildOptions::default());
+        let queries: Vec<Query> = (0..20_000)
+            .map(|_| random_query(&mut rq, &probe, false))
+            .collect();
+        for accel in kinds {
+            let w = World::build(
+                &sc,
+                BuildOptions {
+                    accel,
+                    flatten: true,
+                },
+            );
+            let mut c = Counters::default();
+            let start = std::time::Instant::now();
+            let mut hits = 0;
+            for q in &queries {
+                hits += w.intersect(&q.ray, q.tmin, q.tmax, &mut c).is_some() as usize;
+            }
+            let us = start.elapsed().as_secs_f64() * 1e6 / queries.len() as f64;
+            let n = queries.len() as f64;
+            println!(
+                "{name:6} {:32} build {:7.1} ms  tests/ray {:8.1}  nodes/ray {:6.1}  {us:6.2} µs/ray  ({hits} hits)",
+                w.accel.describe(),
+                w.build_ms,
+                c.intersection_tests as f64 / n,
+                c.nodes_visited as f64 / n,
+            );
+        }
+        // What mailboxing saves: the same grid with and without it.
+        let w = World::build(&sc, BuildOptions::default());
+        let ids: Vec<u32> = (0..w.prims.len() as u32).collect();
+        for res in [None, Some([128, 128, 128])] {
+            let mut grid = Grid::new(&w.prims, ids.clone(), res);
+            for on in [true, false] {
+                grid.set_mailbox(on);
+                let mut c = Counters::default();
+                for q in &queries {
+                    grid.intersect(&w.prims, &q.ray, q.tmin, q.tmax, &mut c);
+                }
+                println!(
+                    "{name:6} {:32} mailbox {on:5}  tests/ray {:8.2}",
+                    grid.describe(),
+                    c.intersection_tests as f64 / queries.len() as f64
+                );
+            }
+        }
+    }
+}
