@@ -42,6 +42,8 @@ pub struct Job {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Draw a progress bar with ETA on stderr.
     pub progress: bool,
+    /// Write the statistics as JSON here.
+    pub stats_json: Option<PathBuf>,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -149,6 +151,7 @@ impl Job {
             pixel_offset: PixelOffset::CENTER,
             cancel: None,
             progress: false,
+            stats_json: None,
         }
     }
 
@@ -217,7 +220,7 @@ impl Job {
         if !complete {
             return Err(JobError::Interrupted(written));
         }
-        Ok(Report {
+        let report = Report {
             scene,
             counters,
             accel: world.accel.describe(),
@@ -225,7 +228,18 @@ impl Job {
             render: render_time,
             primitives: world.prims.len(),
             frame,
-        })
+        };
+        if let Some(path) = &self.stats_json {
+            let text = serde_json::to_string_pretty(&report.stats())
+                .map_err(|e| JobError::Internal(e.to_string()))?;
+            std::fs::write(path, text + "\n").map_err(|e| {
+                JobError::Output(OutputError::Io {
+                    path: path.clone(),
+                    message: e.to_string(),
+                })
+            })?;
+        }
+        Ok(report)
     }
 }
 
@@ -239,40 +253,99 @@ fn progress_bar(rows: u32) -> indicatif::ProgressBar {
     bar
 }
 
+/// The statistics of one render, as printed by `--stats` and written by
+/// `--stats-json` (the keys are the JSON field names).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Stats {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Aggregate and its parameters.
+    pub accel: String,
+    /// Primitives in the world (mesh triangles count one each).
+    pub primitives: usize,
+    /// Triangles in the scene.
+    pub triangles: usize,
+    /// Aggregate build time.
+    pub build_ms: f64,
+    /// Tracing time.
+    pub render_ms: f64,
+    /// Eye rays.
+    pub rays_primary: u64,
+    /// Shadow rays.
+    pub rays_shadow: u64,
+    /// Reflected rays.
+    pub rays_reflected: u64,
+    /// Refracted rays.
+    pub rays_refracted: u64,
+    /// All rays.
+    pub rays_total: u64,
+    /// Ray–primitive intersection tests.
+    pub intersection_tests: u64,
+    /// Nodes or cells visited.
+    pub nodes_visited: u64,
+    /// Tests per ray.
+    pub tests_per_ray: f64,
+    /// Nodes or cells per ray.
+    pub nodes_per_ray: f64,
+    /// Rays per second of tracing time.
+    pub rays_per_second: f64,
+}
+
 impl Report {
-    /// The human-readable statistics table.
-    pub fn stats_text(&self) -> String {
+    /// The statistics of this render.
+    pub fn stats(&self) -> Stats {
         let c = &self.counters;
         let rays = c.rays_total().max(1) as f64;
-        let pixels = (self.frame.width as u64 * self.frame.height as u64).max(1) as f64;
         let secs = self.render.as_secs_f64();
+        Stats {
+            width: self.frame.width,
+            height: self.frame.height,
+            accel: self.accel.clone(),
+            primitives: self.primitives,
+            triangles: self.scene.summary().triangles,
+            build_ms: self.build_ms,
+            render_ms: secs * 1e3,
+            rays_primary: c.primary,
+            rays_shadow: c.shadow,
+            rays_reflected: c.reflected,
+            rays_refracted: c.refracted,
+            rays_total: c.rays_total(),
+            intersection_tests: c.intersection_tests,
+            nodes_visited: c.nodes_visited,
+            tests_per_ray: c.intersection_tests as f64 / rays,
+            nodes_per_ray: c.nodes_visited as f64 / rays,
+            rays_per_second: rays / secs.max(1e-9),
+        }
+    }
+
+    /// The human-readable statistics table.
+    pub fn stats_text(&self) -> String {
+        let st = self.stats();
+        let pixels = (st.width as u64 * st.height as u64).max(1) as f64;
         let mut s = String::new();
         let mut line = |k: &str, v: String| s.push_str(&format!("{k:<28}{v}\n"));
+        line("image", format!("{}x{}", st.width, st.height));
+        line("accelerator", st.accel.clone());
+        line("primitives", st.primitives.to_string());
+        line("triangles", st.triangles.to_string());
+        line("build time", format!("{:.2} ms", st.build_ms));
+        line("render time", format!("{:.2} ms", st.render_ms));
+        line("primary rays", st.rays_primary.to_string());
+        line("shadow rays", st.rays_shadow.to_string());
+        line("reflected rays", st.rays_reflected.to_string());
+        line("refracted rays", st.rays_refracted.to_string());
+        line("rays total", st.rays_total.to_string());
+        line("intersection tests", st.intersection_tests.to_string());
+        line("nodes visited", st.nodes_visited.to_string());
+        line("rays / second", format!("{:.0}", st.rays_per_second));
         line(
-            "image",
-            format!("{}x{}", self.frame.width, self.frame.height),
+            "rays / pixel",
+            format!("{:.3}", st.rays_total as f64 / pixels),
         );
-        line("accelerator", self.accel.clone());
-        line("primitives", self.primitives.to_string());
-        line("build time", format!("{:.2} ms", self.build_ms));
-        line("render time", format!("{:.2} ms", secs * 1e3));
-        line("primary rays", c.primary.to_string());
-        line("shadow rays", c.shadow.to_string());
-        line("reflected rays", c.reflected.to_string());
-        line("refracted rays", c.refracted.to_string());
-        line("rays total", c.rays_total().to_string());
-        line("intersection tests", c.intersection_tests.to_string());
-        line("nodes visited", c.nodes_visited.to_string());
-        line("rays / second", format!("{:.0}", rays / secs.max(1e-9)));
-        line("rays / pixel", format!("{:.3}", rays / pixels));
-        line(
-            "tests / ray",
-            format!("{:.3}", c.intersection_tests as f64 / rays),
-        );
-        line(
-            "nodes / ray",
-            format!("{:.3}", c.nodes_visited as f64 / rays),
-        );
+        line("tests / ray", format!("{:.3}", st.tests_per_ray));
+        line("nodes / ray", format!("{:.3}", st.nodes_per_ray));
         s
     }
 }

@@ -1,6 +1,7 @@
 //! The glint command line: `glint render SCENE -o OUT`, `glint info SCENE`.
 
 use clap::{Args, Parser, Subcommand};
+use glint::accel::AccelKind;
 use glint::format::load_scene;
 use glint::job::Job;
 use std::io::IsTerminal;
@@ -60,6 +61,15 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
+    /// Accelerator: none, grid, grid:NxNxN, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint.
+    #[arg(long, default_value = "bvh")]
+    accel: AccelKind,
+    /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
+    #[arg(long)]
+    no_flatten: bool,
+    /// Write statistics as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    stats_json: Option<PathBuf>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -88,6 +98,9 @@ fn render(a: RenderArgs) -> ExitCode {
     job.integrator.transparent_shadows = a.transparent_shadows;
     job.integrator.shade_back = a.shade_back;
     job.threads = a.threads;
+    job.build.accel = a.accel;
+    job.build.flatten = !a.no_flatten;
+    job.stats_json = a.stats_json;
     job.progress = !a.quiet && std::io::stdout().is_terminal();
     job.cancel = Some(glint::job::interrupt_flag());
     job.normals = a.normals;

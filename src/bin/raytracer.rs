@@ -1,6 +1,7 @@
 //! The MIT 6.837 command line, verbatim:
 //! `raytracer -input scene.txt -size 200 200 -output out.tga -shadows -bounces 3 -weight 0.01`.
 
+use glint::accel::AccelKind;
 use glint::job::Job;
 use glint::render::PixelOffset;
 use std::io::IsTerminal;
@@ -42,6 +43,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
     let mut stats = false;
     let mut ignored = Vec::new();
     let mut quiet = false;
+    let mut grid = None;
+    let mut accel = None;
     while let Some(flag) = it.next() {
         let mut value = |what: &str| -> Result<&String, String> {
             it.next().ok_or_else(|| format!("{flag} expects {what}"))
@@ -67,6 +70,28 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             "-stats" => stats = true,
             "-threads" => job.threads = Some(number(flag, value("a count")?)?),
             "-quiet" => quiet = true,
+            "-grid" => {
+                let mut res = [0u32; 3];
+                for r in &mut res {
+                    *r = number(flag, value("nx ny nz")?)?;
+                }
+                if res.contains(&0) {
+                    return Err(format!(
+                        "-grid {} {} {}: every resolution must be at least 1",
+                        res[0], res[1], res[2]
+                    ));
+                }
+                grid = Some(res);
+            }
+            "-accel" => {
+                let name = value("none|grid|octree|bvh|bvh-median|bvh-midpoint")?;
+                accel = Some(
+                    name.parse::<AccelKind>()
+                        .map_err(|e| format!("-accel: {e}"))?,
+                );
+            }
+            "-no_flatten" => job.build.flatten = false,
+            "-stats_json" => job.stats_json = Some(PathBuf::from(value("a file")?)),
             other => match PREVIEW_ONLY.iter().find(|(f, _)| *f == other) {
                 Some((f, n)) => {
                     for _ in 0..*n {
@@ -84,6 +109,16 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             ignored.join(" ")
         );
     }
+    // `-grid nx ny nz` alone selects the grid (the course's syntax); with
+    // `-accel grid` it sets that grid's resolution; with another `-accel`
+    // the explicit accelerator wins.
+    job.build.accel = match (accel, grid) {
+        (None, Some(res)) | (Some(AccelKind::Grid { .. }), Some(res)) => {
+            AccelKind::Grid { res: Some(res) }
+        }
+        (Some(kind), _) => kind,
+        (None, None) => AccelKind::default(),
+    };
     job.input = input.ok_or("missing -input SCENE")?;
     job.progress = !quiet && std::io::stdout().is_terminal();
     Ok((job, stats))
@@ -112,6 +147,25 @@ mod tests {
         assert!(j.integrator.shadows && j.integrator.shade_back);
         assert_eq!(j.integrator.bounces, 3);
         assert_eq!(j.integrator.weight_cutoff, 0.01);
+    }
+
+    #[test]
+    fn grid_and_accel_flags() {
+        let (j, _) = parse(&args("-input a.txt -grid 10 10 7")).unwrap();
+        assert_eq!(
+            j.build.accel,
+            AccelKind::Grid {
+                res: Some([10, 10, 7])
+            }
+        );
+        let (j, _) = parse(&args("-input a.txt -grid 10 10 7 -accel octree")).unwrap();
+        assert_eq!(j.build.accel, AccelKind::Octree);
+        let (j, _) = parse(&args("-input a.txt")).unwrap();
+        assert_eq!(j.build.accel, AccelKind::default());
+        assert!(parse(&args("-input a.txt -accel kdtree"))
+            .unwrap_err()
+            .contains("kdtree"));
+        assert!(parse(&args("-input a.txt -grid 0 1 1")).is_err());
     }
 
     #[test]
