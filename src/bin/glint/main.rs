@@ -19,8 +19,28 @@ struct Cli {
     command: Command,
 }
 
+mod bench;
+
 #[derive(Subcommand)]
 enum Command {
+    /// Time every accelerator on the course's meshes (and any OBJ given).
+    Bench {
+        /// Folder holding the 6.837 scenes.
+        #[arg(long, default_value = "../shared/scenes/6837")]
+        scenes: PathBuf,
+        /// Extra OBJ meshes, e.g. the anchors' meshgen output (see scripts/bench.sh).
+        #[arg(long)]
+        mesh: Vec<PathBuf>,
+        /// Square image size.
+        #[arg(long, default_value_t = 400)]
+        size: u32,
+        /// Timed runs per accelerator (median reported).
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
+        /// Skip brute force (and extrapolate it) when it would take longer than this many seconds.
+        #[arg(long, default_value_t = 60.0)]
+        none_limit: f64,
+    },
     /// Render a scene to an image.
     Render(RenderArgs),
     /// Show what a scene file holds.
@@ -86,6 +106,25 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Render(a) => render(a),
         Command::Info { scene } => info(scene),
+        Command::Bench {
+            scenes,
+            mesh,
+            size,
+            runs,
+            none_limit,
+        } => match bench::run(&bench::BenchArgs {
+            scenes,
+            meshes: mesh,
+            size,
+            runs,
+            none_limit_s: none_limit,
+        }) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("glint: {e}");
+                ExitCode::from(2)
+            }
+        },
     }
 }
 

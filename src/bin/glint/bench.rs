@@ -1,0 +1,197 @@
+//! `glint bench`: every accelerator on the course's bunnies, the 6.837 logo
+//! and a generated mesh of a million triangles, in one table.
+//!
+//! Times are medians of several runs in this one process, so the ratios
+//! between accelerators are taken under the same machine load.
+
+use glint::accel::{AccelKind, Split};
+use glint::format::{load_scene, obj::load_obj};
+use glint::integrator::Whitted;
+use glint::math::Vec3;
+use glint::render::{render, CameraModel, PixelOffset};
+use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape};
+use glint::world::{BuildOptions, World};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Settings of a benchmark run.
+pub struct BenchArgs {
+    /// Folder of the 6.837 scenes.
+    pub scenes: PathBuf,
+    /// Extra OBJ meshes to bench (e.g. meshgen's million-triangle sphere).
+    pub meshes: Vec<PathBuf>,
+    /// Image size (square).
+    pub size: u32,
+    /// Timed runs per accelerator (the median is reported).
+    pub runs: usize,
+    /// Brute force is skipped when its estimated time exceeds this.
+    pub none_limit_s: f64,
+}
+
+const ACCELS: [AccelKind; 6] = [
+    AccelKind::None,
+    AccelKind::Grid { res: None },
+    AccelKind::Octree,
+    AccelKind::Bvh(Split::Midpoint),
+    AccelKind::Bvh(Split::Median),
+    AccelKind::Bvh(Split::Sah),
+];
+
+struct Row {
+    build_ms: f64,
+    render_ms: f64,
+    tests_per_ray: f64,
+    nodes_per_ray: f64,
+    estimated: bool,
+}
+
+/// Runs the benchmark and prints the table (markdown) to stdout.
+pub fn run(args: &BenchArgs) -> Result<(), String> {
+    let mut cases: Vec<(String, Scene)> = Vec::new();
+    for name in [
+        "scene6_04_bunny_mesh_200.txt",
+        "scene6_05_bunny_mesh_1k.txt",
+        "scene6_06_bunny_mesh_5k.txt",
+        "scene6_07_bunny_mesh_40k.txt",
+        "scene6_18_6.837_logo.txt",
+    ] {
+        let scene = load_scene(&args.scenes.join(name)).map_err(|e| e.render())?;
+        cases.push((name.trim_end_matches(".txt").to_string(), scene));
+    }
+    for mesh in &args.meshes {
+        cases.push((display_name(mesh), mesh_scene(mesh)?));
+    }
+    let integrator = Whitted {
+        bounces: 5,
+        weight_cutoff: 0.01,
+        shadows: true,
+        shade_back: true,
+        transparent_shadows: false,
+    };
+    println!(
+        "{}x{} pixels, shadows, shade_back, 5 bounces; median of {} runs; {} threads\n",
+        args.size,
+        args.size,
+        args.runs,
+        rayon::current_num_threads()
+    );
+    println!("| scene | triangles | accelerator | build ms | render ms | tests/ray | nodes/ray | speedup vs none |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for (name, scene) in &cases {
+        let tris = scene.summary().triangles;
+        let mut rows: Vec<(AccelKind, Row)> = Vec::new();
+        for &accel in ACCELS.iter().skip(1) {
+            rows.push((
+                accel,
+                measure(scene, accel, &integrator, args.size, args.runs),
+            ));
+        }
+        let none = estimate_or_measure_none(scene, &integrator, args);
+        let none_ms = none.render_ms;
+        rows.insert(0, (AccelKind::None, none));
+        for (accel, r) in &rows {
+            let mark = if r.estimated { "~" } else { "" };
+            println!(
+                "| {name} | {tris} | {accel} | {:.1} | {mark}{:.1} | {mark}{:.2} | {:.2} | {mark}{:.1}x |",
+                r.build_ms,
+                r.render_ms,
+                r.tests_per_ray,
+                r.nodes_per_ray,
+                none_ms / r.render_ms
+            );
+        }
+    }
+    println!("\n~ = brute force not run (estimated over {:.0} s): its time is extrapolated from a 16x16 render", args.none_limit_s);
+    Ok(())
+}
+
+fn measure(scene: &Scene, accel: AccelKind, integrator: &Whitted, size: u32, runs: usize) -> Row {
+    let mut builds = Vec::new();
+    let mut renders = Vec::new();
+    let mut counters = Default::default();
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        let world = World::build(
+            scene,
+            BuildOptions {
+                accel,
+                flatten: true,
+            },
+        );
+        builds.push(t.elapsed().as_secs_f64() * 1e3);
+        let cam = CameraModel::new(&scene.camera);
+        let t = Instant::now();
+        let (_, c) = render(&world, &cam, integrator, (size, size), PixelOffset::CENTER);
+        renders.push(t.elapsed().as_secs_f64() * 1e3);
+        counters = c;
+    }
+    let rays = counters.rays_total().max(1) as f64;
+    Row {
+        build_ms: median(&mut builds),
+        render_ms: median(&mut renders),
+        tests_per_ray: counters.intersection_tests as f64 / rays,
+        nodes_per_ray: counters.nodes_visited as f64 / rays,
+        estimated: false,
+    }
+}
+
+/// Brute force costs (rays × primitives): measure it on a 16×16 image first
+/// and run the full size only when the extrapolation stays under the limit.
+fn estimate_or_measure_none(scene: &Scene, integrator: &Whitted, args: &BenchArgs) -> Row {
+    let small = measure(scene, AccelKind::None, integrator, 16, 1);
+    let scale = (args.size as f64 / 16.0).powi(2);
+    if small.render_ms * scale / 1e3 <= args.none_limit_s {
+        return measure(scene, AccelKind::None, integrator, args.size, 1);
+    }
+    // Tests per ray are a property of brute force (every bounded primitive
+    // plus the planes), so the small render's figure holds at full size.
+    Row {
+        render_ms: small.render_ms * scale,
+        estimated: true,
+        ..small
+    }
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+fn display_name(p: &Path) -> String {
+    p.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// An OBJ mesh framed by a perspective camera, lit by one directional light.
+fn mesh_scene(path: &Path) -> Result<Scene, String> {
+    let mesh = load_obj(path).map_err(|e| e.render())?;
+    let b = glint::math::Aabb::from_points(mesh.positions.iter().copied());
+    let c = b.center();
+    let r = 0.5 * b.extent().length();
+    Ok(Scene {
+        camera: Camera::Perspective {
+            center: c + Vec3::new(0.3, 0.4, 1.0).normalize() * r * 2.6,
+            direction: -Vec3::new(0.3, 0.4, 1.0),
+            up: Vec3::Y,
+            angle_deg: 45.0,
+        },
+        lights: vec![Light::Directional {
+            direction: Vec3::new(-0.5, -1.0, -0.4),
+            color: Vec3::splat(0.9),
+        }],
+        background: Background {
+            color: Vec3::splat(0.2),
+            ambient: Vec3::splat(0.1),
+        },
+        materials: vec![Material::Phong(Phong {
+            diffuse: Vec3::new(0.8, 0.7, 0.6),
+            ..Phong::default()
+        })],
+        root: Node::Shape {
+            shape: Shape::Mesh(Arc::new(mesh)),
+            material: Some(0),
+        },
+    })
+}
