@@ -1,5 +1,5 @@
 use super::Summary;
-use crate::math::{Mat4, Vec3};
+use crate::math::{Aabb, Mat4, Vec3};
 use std::sync::Arc;
 
 /// A triangle mesh: shared vertices, triangles by index.
@@ -57,6 +57,37 @@ pub enum Node {
 }
 
 impl Node {
+    /// World bounds of this subtree seen through `m` (object-to-world).
+    ///
+    /// A group is the union of its children. Under a transform, triangles and
+    /// meshes transform their vertices (the tightest box); a sphere transforms
+    /// the 8 corners of its box (a rotated sphere's box grows by up to √3);
+    /// planes are unbounded unless axis-aligned (see `shape::Plane::bounds`).
+    /// The world never needs these (it flattens first); they are what the
+    /// tree looks like to a ray before flattening, for `glint info`.
+    pub fn bounds(&self, m: &Mat4) -> Aabb {
+        match self {
+            Node::Group(children) => children
+                .iter()
+                .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds(m))),
+            Node::Transform { matrix, child } => child.bounds(&(*m * *matrix)),
+            Node::Shape { shape, .. } => match shape {
+                Shape::Sphere { center, radius } => Aabb::new(
+                    *center - Vec3::splat(*radius),
+                    *center + Vec3::splat(*radius),
+                )
+                .transformed(m),
+                Shape::Plane { normal, offset } => crate::shape::Plane::new(*normal, *offset)
+                    .and_then(|p| p.transformed(m))
+                    .map_or(Aabb::EMPTY, |p| p.bounds()),
+                Shape::Triangle(v) => Aabb::from_points(v.iter().map(|&p| m.transform_point3(p))),
+                Shape::Mesh(mesh) => {
+                    Aabb::from_points(mesh.positions.iter().map(|&p| m.transform_point3(p)))
+                }
+            },
+        }
+    }
+
     pub(super) fn count(&self, s: &mut Summary) {
         match self {
             Node::Group(children) => {
@@ -77,5 +108,70 @@ impl Node {
                 }
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn xf(m: Mat4, child: Node) -> Node {
+        Node::Transform {
+            matrix: m,
+            child: Box::new(child),
+        }
+    }
+
+    fn tri() -> Node {
+        Node::Shape {
+            shape: Shape::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
+            material: None,
+        }
+    }
+
+    #[test]
+    fn group_is_the_union() {
+        let s = Node::Shape {
+            shape: Shape::Sphere {
+                center: Vec3::new(5.0, 0.0, 0.0),
+                radius: 1.0,
+            },
+            material: None,
+        };
+        let b = Node::Group(vec![tri(), s]).bounds(&Mat4::IDENTITY);
+        assert_eq!(b.min, Vec3::new(0.0, -1.0, -1.0));
+        assert_eq!(b.max, Vec3::new(6.0, 1.0, 1.0));
+    }
+
+    #[test]
+    fn transformed_triangle_uses_its_vertices_not_box_corners() {
+        let m = Mat4::from_rotation_z(std::f32::consts::FRAC_PI_4);
+        let tight = xf(m, tri()).bounds(&Mat4::IDENTITY);
+        let corners = Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)).transformed(&m);
+        // The box of the rotated triangle is strictly smaller than the rotated box.
+        assert!(tight.surface_area() < corners.surface_area());
+        assert!((tight.max.y - 2f32.sqrt() / 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn transformed_sphere_uses_the_8_corners() {
+        let s = Node::Shape {
+            shape: Shape::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+            },
+            material: None,
+        };
+        let m =
+            Mat4::from_translation(Vec3::X) * Mat4::from_rotation_z(std::f32::consts::FRAC_PI_4);
+        let b = xf(m, s).bounds(&Mat4::IDENTITY);
+        assert!((b.max.x - (1.0 + 2f32.sqrt())).abs() < 1e-5);
+    }
+
+    #[test]
+    fn nested_transforms_compose() {
+        let inner = xf(Mat4::from_scale(Vec3::splat(2.0)), tri());
+        let b = xf(Mat4::from_translation(Vec3::new(0.0, 0.0, 3.0)), inner).bounds(&Mat4::IDENTITY);
+        assert_eq!(b.max, Vec3::new(2.0, 2.0, 3.0));
     }
 }

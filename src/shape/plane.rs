@@ -46,9 +46,22 @@ impl Plane {
         (t > tmin && t < tmax).then_some(t)
     }
 
-    /// Planes are unbounded: they stay out of the acceleration structures.
+    /// Planes are unbounded, so they stay out of the acceleration structures
+    /// and are tested on every ray. A plane whose normal lies exactly along an
+    /// axis is still bounded along that one axis (its box is a slab of zero
+    /// thickness), which is all a box can say about it.
     pub fn bounds(&self) -> Aabb {
-        Aabb::new(Vec3::NEG_INFINITY, Vec3::INFINITY)
+        let mut b = Aabb::new(Vec3::NEG_INFINITY, Vec3::INFINITY);
+        let n = self.normal;
+        for axis in 0..3 {
+            let others = (0..3).filter(|&a| a != axis).all(|a| n[a] == 0.0);
+            if others && n[axis] != 0.0 {
+                let at = self.offset / n[axis];
+                b.min[axis] = at;
+                b.max[axis] = at;
+            }
+        }
+        b
     }
 }
 
@@ -77,6 +90,16 @@ mod tests {
         let p = Plane::new(Vec3::Y, 1.0).unwrap();
         let r = Ray::new(Vec3::ZERO, Vec3::Y);
         assert!((p.intersect(&r, 0.0, f32::INFINITY).unwrap() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn axis_plane_is_bounded_along_its_normal_only() {
+        let b = Plane::new(Vec3::new(0.0, -2.0, 0.0), 3.0).unwrap().bounds();
+        assert_eq!((b.min.y, b.max.y), (-1.5, -1.5));
+        assert!(b.min.x.is_infinite() && b.max.z.is_infinite());
+        assert!(!b.is_finite());
+        let tilted = Plane::new(Vec3::new(0.0, 1.0, 1.0), 1.0).unwrap().bounds();
+        assert!(tilted.min.y.is_infinite() && tilted.min.z.is_infinite());
     }
 
     #[test]
