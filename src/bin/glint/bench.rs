@@ -27,6 +27,8 @@ pub struct BenchArgs {
     pub runs: usize,
     /// Brute force is skipped when its estimated time exceeds this.
     pub none_limit_s: f64,
+    /// Only the cases whose name contains this.
+    pub only: Option<String>,
 }
 
 const ACCELS: [AccelKind; 6] = [
@@ -59,8 +61,12 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         let scene = load_scene(&args.scenes.join(name)).map_err(|e| e.render())?;
         cases.push((name.trim_end_matches(".txt").to_string(), scene));
     }
+    cases.push(("bunny_in_stadium".into(), stadium_scene(&args.scenes)?));
     for mesh in &args.meshes {
         cases.push((display_name(mesh), mesh_scene(mesh)?));
+    }
+    if let Some(only) = &args.only {
+        cases.retain(|(name, _)| name.contains(only.as_str()));
     }
     let integrator = Whitted {
         bounces: 5,
@@ -162,6 +168,27 @@ fn display_name(p: &Path) -> String {
     p.file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default()
+}
+
+/// The "teapot in a stadium": the 40k bunny (about 0.15 units across) on a
+/// floor of two triangles 400 units wide. A uniform grid sized to the whole
+/// scene puts the bunny into a handful of cells; a BVH adapts.
+fn stadium_scene(scenes: &Path) -> Result<Scene, String> {
+    let mut scene = mesh_scene(&scenes.join("bunny_40k.obj"))?;
+    let y = -0.07;
+    let w = 200.0;
+    let corners = [
+        Vec3::new(-w, y, -w),
+        Vec3::new(w, y, -w),
+        Vec3::new(w, y, w),
+        Vec3::new(-w, y, w),
+    ];
+    let floor = |a: usize, b: usize, c: usize| Node::Shape {
+        shape: Shape::Triangle([corners[a], corners[b], corners[c]]),
+        material: Some(0),
+    };
+    scene.root = Node::Group(vec![scene.root, floor(0, 2, 1), floor(0, 3, 2)]);
+    Ok(scene)
 }
 
 /// An OBJ mesh framed by a perspective camera, lit by one directional light.

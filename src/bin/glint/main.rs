@@ -40,6 +40,9 @@ enum Command {
         /// Skip brute force (and extrapolate it) when it would take longer than this many seconds.
         #[arg(long, default_value_t = 60.0)]
         none_limit: f64,
+        /// Only the cases whose name contains this text.
+        #[arg(long)]
+        only: Option<String>,
     },
     /// Render a scene to an image.
     Render(RenderArgs),
@@ -112,12 +115,14 @@ fn main() -> ExitCode {
             size,
             runs,
             none_limit,
+            only,
         } => match bench::run(&bench::BenchArgs {
             scenes,
             meshes: mesh,
             size,
             runs,
             none_limit_s: none_limit,
+            only,
         }) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
