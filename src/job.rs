@@ -127,6 +127,10 @@ pub struct Report {
     pub accel: String,
     /// Aggregate build time.
     pub build_ms: f64,
+    /// Time to read the scene and its meshes.
+    pub load_ms: f64,
+    /// Time to flatten the scene and build the aggregate.
+    pub world_ms: f64,
     /// Time spent tracing.
     pub render: Duration,
     /// Number of primitives in the world.
@@ -163,8 +167,12 @@ impl Job {
                 self.width, self.height
             )));
         }
+        let t_load = Instant::now();
         let scene = load_scene(&self.input)?;
+        let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+        let t_world = Instant::now();
         let world = World::build(&scene, self.build);
+        let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
         let camera = CameraModel::new(&scene.camera);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.threads.unwrap_or(0))
@@ -225,6 +233,8 @@ impl Job {
             counters,
             accel: world.accel.describe(),
             build_ms: world.build_ms,
+            load_ms,
+            world_ms,
             render: render_time,
             primitives: world.prims.len(),
             frame,
@@ -267,6 +277,10 @@ pub struct Stats {
     pub primitives: usize,
     /// Triangles in the scene.
     pub triangles: usize,
+    /// Scene and mesh reading time.
+    pub load_ms: f64,
+    /// Flattening plus aggregate build time.
+    pub world_ms: f64,
     /// Aggregate build time.
     pub build_ms: f64,
     /// Tracing time.
@@ -305,6 +319,8 @@ impl Report {
             accel: self.accel.clone(),
             primitives: self.primitives,
             triangles: self.scene.summary().triangles,
+            load_ms: self.load_ms,
+            world_ms: self.world_ms,
             build_ms: self.build_ms,
             render_ms: secs * 1e3,
             rays_primary: c.primary,
@@ -330,6 +346,8 @@ impl Report {
         line("accelerator", st.accel.clone());
         line("primitives", st.primitives.to_string());
         line("triangles", st.triangles.to_string());
+        line("load time", format!("{:.2} ms", st.load_ms));
+        line("world time", format!("{:.2} ms (flatten + build)", st.world_ms));
         line("build time", format!("{:.2} ms", st.build_ms));
         line("render time", format!("{:.2} ms", st.render_ms));
         line("primary rays", st.rays_primary.to_string());

@@ -12,7 +12,8 @@ pub use light::Light;
 pub use material::{Material, Phong, TextureKind};
 pub use node::{Mesh, Node, Shape};
 
-use crate::math::Vec3;
+use crate::math::{Aabb, Vec3};
+use std::sync::Arc;
 
 /// Background colour and the ambient light that every surface receives.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,6 +51,43 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A scene showing `mesh` alone: a perspective camera (45°) looking at
+    /// the mesh's bounding sphere from above and to the right, one white
+    /// directional light, a warm grey material. Used for bare OBJ input.
+    pub fn for_mesh(mesh: Mesh) -> Scene {
+        let b = Aabb::from_points(mesh.positions.iter().copied());
+        let (c, r) = if b.is_empty() {
+            (Vec3::ZERO, 1.0)
+        } else {
+            (b.center(), (0.5 * b.extent().length()).max(1e-6))
+        };
+        let view = Vec3::new(0.3, 0.4, 1.0).normalize();
+        Scene {
+            camera: Camera::Perspective {
+                center: c + view * r * 2.6,
+                direction: -view,
+                up: Vec3::Y,
+                angle_deg: 45.0,
+            },
+            lights: vec![Light::Directional {
+                direction: Vec3::new(-0.5, -1.0, -0.4),
+                color: Vec3::splat(0.9),
+            }],
+            background: Background {
+                color: Vec3::splat(0.2),
+                ambient: Vec3::splat(0.1),
+            },
+            materials: vec![Material::Phong(Phong {
+                diffuse: Vec3::new(0.8, 0.7, 0.6),
+                ..Phong::default()
+            })],
+            root: Node::Shape {
+                shape: Shape::Mesh(Arc::new(mesh)),
+                material: Some(0),
+            },
+        }
+    }
+
     /// Counts of what the scene holds, for `glint info` and statistics.
     pub fn summary(&self) -> Summary {
         let mut s = Summary {

@@ -9,10 +9,9 @@ use glint::format::{load_scene, obj::load_obj};
 use glint::integrator::Whitted;
 use glint::math::Vec3;
 use glint::render::{render, CameraModel, PixelOffset};
-use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape};
+use glint::scene::{Node, Scene, Shape};
 use glint::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Instant;
 
 /// Settings of a benchmark run.
@@ -191,34 +190,7 @@ fn stadium_scene(scenes: &Path) -> Result<Scene, String> {
     Ok(scene)
 }
 
-/// An OBJ mesh framed by a perspective camera, lit by one directional light.
+/// An OBJ mesh framed by [`Scene::for_mesh`].
 fn mesh_scene(path: &Path) -> Result<Scene, String> {
-    let mesh = load_obj(path).map_err(|e| e.render())?;
-    let b = glint::math::Aabb::from_points(mesh.positions.iter().copied());
-    let c = b.center();
-    let r = 0.5 * b.extent().length();
-    Ok(Scene {
-        camera: Camera::Perspective {
-            center: c + Vec3::new(0.3, 0.4, 1.0).normalize() * r * 2.6,
-            direction: -Vec3::new(0.3, 0.4, 1.0),
-            up: Vec3::Y,
-            angle_deg: 45.0,
-        },
-        lights: vec![Light::Directional {
-            direction: Vec3::new(-0.5, -1.0, -0.4),
-            color: Vec3::splat(0.9),
-        }],
-        background: Background {
-            color: Vec3::splat(0.2),
-            ambient: Vec3::splat(0.1),
-        },
-        materials: vec![Material::Phong(Phong {
-            diffuse: Vec3::new(0.8, 0.7, 0.6),
-            ..Phong::default()
-        })],
-        root: Node::Shape {
-            shape: Shape::Mesh(Arc::new(mesh)),
-            material: Some(0),
-        },
-    })
+    Ok(Scene::for_mesh(load_obj(path).map_err(|e| e.render())?))
 }
