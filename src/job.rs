@@ -347,7 +347,10 @@ impl Report {
         line("primitives", st.primitives.to_string());
         line("triangles", st.triangles.to_string());
         line("load time", format!("{:.2} ms", st.load_ms));
-        line("world time", format!("{:.2} ms (flatten + build)", st.world_ms));
+        line(
+            "world time",
+            format!("{:.2} ms (flatten + build)", st.world_ms),
+        );
         line("build time", format!("{:.2} ms", st.build_ms));
         line("render time", format!("{:.2} ms", st.render_ms));
         line("primary rays", st.rays_primary.to_string());

@@ -228,3 +228,34 @@ fn sigint_saves_a_partial_image_and_keeps_the_original() {
     assert_eq!((partial.width(), partial.height()), (3000, 3000));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn glint_renders_a_bare_obj() {
+    let dir = scratch("obj");
+    let mesh = abs(&format!("{SCENES}/bunny_200.obj"));
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "render",
+            &mesh,
+            "-o",
+            "bunny.png",
+            "--size",
+            "64",
+            "48",
+            "--shadows",
+            "--quiet",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(dir.join("bunny.png")).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    // The framing camera must actually see the mesh: not every pixel is background.
+    let bg = *img.get_pixel(0, 0);
+    assert!(img.pixels().filter(|p| **p != bg).count() > 64 * 48 / 20);
+}

@@ -17,7 +17,10 @@ use std::path::Path;
 /// Reads a scene file; meshes are resolved relative to the scene file's folder.
 /// A `.obj` file is read as a mesh and framed by [`Scene::for_mesh`].
 pub fn load_scene(path: &Path) -> Result<Scene, ParseError> {
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+    {
         return Ok(Scene::for_mesh(obj::load_obj(path)?));
     }
     let bytes = std::fs::read(path)
