@@ -186,3 +186,39 @@ fn every_shared_scene_renders_with_finite_pixels() {
         );
     }
 }
+
+#[test]
+fn zero_and_huge_sizes_are_refused_up_front() {
+    let dir = scratch("sizes");
+    let scene = abs(&format!("{SCENES}/scene1_01.txt"));
+    let out = raytracer(
+        &["-input", &scene, "-size", "0", "0", "-output", "z.png"],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("image size 0x0: width and height must be at least 1"),
+        "{err}"
+    );
+    assert!(!dir.join("z.png").exists());
+
+    let start = std::time::Instant::now();
+    let out = raytracer(
+        &[
+            "-input", &scene, "-size", "100000", "100000", "-output", "h.png",
+        ],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("image size 100000x100000 would need 260.8 GiB of memory"),
+        "{err}"
+    );
+    assert!(err.contains("choose a smaller size"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!dir.join("h.png").exists());
+    // Refused before loading or allocating anything.
+    assert!(start.elapsed().as_secs() < 5);
+}
