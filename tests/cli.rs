@@ -222,3 +222,25 @@ fn zero_and_huge_sizes_are_refused_up_front() {
     // Refused before loading or allocating anything.
     assert!(start.elapsed().as_secs() < 5);
 }
+
+#[test]
+fn hdr_outputs_by_extension() {
+    let dir = scratch("hdr-cli");
+    let scene = abs(&format!("{SCENES}/scene2_01_diffuse.txt"));
+    for name in ["out.exr", "out.pfm"] {
+        let out = raytracer(
+            &["-input", &scene, "-size", "40", "30", "-output", name],
+            &dir,
+        );
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let pfm = std::fs::read(dir.join("out.pfm")).unwrap();
+    assert!(pfm.starts_with(b"PF\n40 30\n-1.0\n"));
+    assert_eq!(pfm.len(), 14 + 40 * 30 * 12);
+    let exr = std::fs::read(dir.join("out.exr")).unwrap();
+    assert!(exr.starts_with(&[0x76, 0x2f, 0x31, 0x01]), "EXR magic number");
+}
