@@ -167,6 +167,7 @@ impl Job {
                 self.width, self.height
             )));
         }
+        check_frame_memory(self.width, self.height, available_memory())?;
         let t_load = Instant::now();
         let scene = load_scene(&self.input)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
@@ -307,6 +308,45 @@ pub struct Stats {
     pub rays_per_second: f64,
 }
 
+/// Bytes per pixel of a [`Frame`]: colour `Vec3`, depth `f32`, normal `Vec3`.
+pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12;
+
+/// Memory assumed available where `/proc/meminfo` cannot be read.
+pub const FALLBACK_AVAILABLE: u64 = 16 << 30;
+
+/// Bytes the system can give this process now: `MemAvailable` from
+/// `/proc/meminfo` on Linux, else [`FALLBACK_AVAILABLE`].
+pub fn available_memory() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            kib.checked_mul(1024)
+        })
+        .unwrap_or(FALLBACK_AVAILABLE)
+}
+
+/// Refuses, before anything is allocated, an image whose frame planes would
+/// take more than three quarters of `available` bytes (the rest is left for
+/// the scene, the output encoder and everything else running).
+pub fn check_frame_memory(width: u32, height: u32, available: u64) -> Result<(), JobError> {
+    let need = u128::from(width) * u128::from(height) * u128::from(FRAME_BYTES_PER_PIXEL);
+    let limit = u128::from(available / 4 * 3);
+    if need <= limit {
+        return Ok(());
+    }
+    let gib = |b: u128| b as f64 / f64::from(1u32 << 30);
+    Err(JobError::Usage(format!(
+        "image size {width}x{height} would need {:.1} GiB of memory for its frame \
+         ({FRAME_BYTES_PER_PIXEL} bytes per pixel), more than the {:.1} GiB allowed \
+         (3/4 of the {:.1} GiB available); choose a smaller size",
+        gib(need),
+        gib(limit),
+        gib(u128::from(available)),
+    )))
+}
+
 impl Report {
     /// The statistics of this render.
     pub fn stats(&self) -> Stats {
@@ -368,5 +408,25 @@ impl Report {
         line("tests / ray", format!("{:.3}", st.tests_per_ray));
         line("nodes / ray", format!("{:.3}", st.nodes_per_ray));
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_memory_limit() {
+        let gib = 1u64 << 30;
+        assert!(check_frame_memory(1000, 1000, gib).is_ok());
+        let e = check_frame_memory(100_000, 100_000, 16 * gib).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        let msg = e.to_string();
+        assert!(msg.contains("100000x100000"), "{msg}");
+        assert!(msg.contains("260.8 GiB"), "{msg}");
+        assert!(msg.contains("12.0 GiB allowed"), "{msg}");
+        // The product cannot overflow.
+        assert!(check_frame_memory(u32::MAX, u32::MAX, u64::MAX).is_err());
+        assert!(available_memory() > 0);
     }
 }

@@ -259,3 +259,64 @@ fn glint_renders_a_bare_obj() {
     let bg = *img.get_pixel(0, 0);
     assert!(img.pixels().filter(|p| **p != bg).count() > 64 * 48 / 20);
 }
+
+#[test]
+fn zero_and_huge_sizes_are_refused_up_front() {
+    let dir = scratch("sizes");
+    let scene = abs(&format!("{SCENES}/scene1_01.txt"));
+    let out = raytracer(
+        &["-input", &scene, "-size", "0", "0", "-output", "z.png"],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("image size 0x0: width and height must be at least 1"),
+        "{err}"
+    );
+    assert!(!dir.join("z.png").exists());
+
+    let start = std::time::Instant::now();
+    let out = raytracer(
+        &[
+            "-input", &scene, "-size", "100000", "100000", "-output", "h.png",
+        ],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("image size 100000x100000 would need 260.8 GiB of memory"),
+        "{err}"
+    );
+    assert!(err.contains("choose a smaller size"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!dir.join("h.png").exists());
+    // Refused before loading or allocating anything.
+    assert!(start.elapsed().as_secs() < 5);
+}
+
+#[test]
+fn hdr_outputs_by_extension() {
+    let dir = scratch("hdr-cli");
+    let scene = abs(&format!("{SCENES}/scene2_01_diffuse.txt"));
+    for name in ["out.exr", "out.pfm"] {
+        let out = raytracer(
+            &["-input", &scene, "-size", "40", "30", "-output", name],
+            &dir,
+        );
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let pfm = std::fs::read(dir.join("out.pfm")).unwrap();
+    assert!(pfm.starts_with(b"PF\n40 30\n-1.0\n"));
+    assert_eq!(pfm.len(), 14 + 40 * 30 * 12);
+    let exr = std::fs::read(dir.join("out.exr")).unwrap();
+    assert!(
+        exr.starts_with(&[0x76, 0x2f, 0x31, 0x01]),
+        "EXR magic number"
+    );
+}

@@ -1,7 +1,7 @@
 //! Every fixture in `tests/malformed/` must fail to load with an error at an
 //! exact line and column whose message says what went wrong.
 
-use glint::format::{load_scene, parse_scene, ParseError};
+use glint::format::{load_scene, obj::load_obj, parse_scene, ParseError};
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -162,6 +162,236 @@ const CASES: &[Case] = &[
         5,
         "expected a transform command or the object to transform, found '}'",
     ),
+    // Truncated inside every kind of block.
+    case(
+        "truncated_camera.txt",
+        4,
+        11,
+        "expected a number, found end of file",
+    ),
+    case(
+        "truncated_lights.txt",
+        12,
+        23,
+        "expected 'position', 'color', 'attenuation', or '}' closing the PointLight at 11:5, found end of file",
+    ),
+    case(
+        "truncated_background.txt",
+        10,
+        25,
+        "expected a number, found end of file",
+    ),
+    case(
+        "truncated_materials.txt",
+        13,
+        17,
+        "expected a number, found end of file",
+    ),
+    case(
+        "truncated_group.txt",
+        16,
+        37,
+        "'MaterialIndex', or '}' closing the Group at 13:1, found end of file",
+    ),
+    case(
+        "truncated_transform.txt",
+        18,
+        18,
+        "expected a number, found end of file",
+    ),
+    case(
+        "truncated_texture.txt",
+        15,
+        22,
+        "expected an integer, found end of file",
+    ),
+    // Numbers, keywords and braces.
+    case(
+        "number_out_of_range.txt",
+        16,
+        34,
+        "expected a number within single-precision range, found '1e39'",
+    ),
+    case("comma_number.txt", 5, 10, "expected a number, found '2,5'"),
+    case("hex_number.txt", 16, 21, "expected a number, found '0x10'"),
+    case(
+        "fractional_count.txt",
+        9,
+        18,
+        "expected an integer, found '1.0'",
+    ),
+    case(
+        "unknown_block.txt",
+        8,
+        1,
+        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group), found 'Light'",
+    ),
+    case(
+        "unknown_field.txt",
+        16,
+        36,
+        "expected 'center', 'radius', or '}' closing the Sphere at 16:5, found 'color'",
+    ),
+    case(
+        "duplicate_field.txt",
+        16,
+        36,
+        "expected each Sphere field at most once, found a 2nd 'radius'",
+    ),
+    case(
+        "missing_field.txt",
+        16,
+        27,
+        "expected 'radius' in Sphere, found '}'",
+    ),
+    case(
+        "stray_close_brace.txt",
+        7,
+        1,
+        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group), found '}'",
+    ),
+    case(
+        "missing_camera_brace.txt",
+        2,
+        5,
+        "expected '{' after 'OrthographicCamera', found 'center'",
+    ),
+    // Values that would make geometry or shading meaningless.
+    case(
+        "negative_radius.txt",
+        16,
+        34,
+        "expected a positive radius, found '-0.5'",
+    ),
+    case(
+        "zero_direction.txt",
+        3,
+        15,
+        "expected a non-zero camera direction, found '0 0 0'",
+    ),
+    case(
+        "zero_up.txt",
+        4,
+        8,
+        "expected a non-zero up vector, found '0.0 0 0'",
+    ),
+    case(
+        "zero_light_direction.txt",
+        10,
+        34,
+        "expected a non-zero light direction, found '0 0 0'",
+    ),
+    case("negative_size.txt", 5, 10, "expected a positive size, found '-5'"),
+    case(
+        "singular_transform.txt",
+        16,
+        5,
+        "expected an invertible transform, found 'Transform' with a singular matrix",
+    ),
+    case(
+        "negative_exponent.txt",
+        10,
+        44,
+        "expected an exponent >= 0, found '-2'",
+    ),
+    case(
+        "zero_ior.txt",
+        10,
+        57,
+        "expected a positive index of refraction, found '0'",
+    ),
+    case(
+        "texture_first.txt",
+        10,
+        34,
+        "expected a material defined earlier (this texture is the first entry), found '0'",
+    ),
+    // Meshes that cannot be read, or whose contents are bad.
+    case(
+        "mesh_is_directory.txt",
+        16,
+        29,
+        "expected a readable OBJ file, found 'directory.obj' (Is a directory)",
+    ),
+    case(
+        "mesh_is_dot.txt",
+        16,
+        29,
+        "expected a readable OBJ file, found '.' (Is a directory)",
+    ),
+    case(
+        "obj_nan_mesh.txt",
+        2,
+        5,
+        "nan_vertex.obj:2:5: expected a finite number, found 'nan'",
+    ),
+    // OBJ files on their own (read with `load_obj`).
+    case(
+        "bad_index.obj",
+        6,
+        7,
+        "expected a vertex index from 1 to 3 (or -1 to -3), found '4'",
+    ),
+    case(
+        "zero_index.obj",
+        4,
+        3,
+        "expected a vertex index from 1 to 3 (or -1 to -3), found '0'",
+    ),
+    case(
+        "negative_index.obj",
+        4,
+        9,
+        "expected a vertex index from 1 to 3 (or -1 to -3), found '-4'",
+    ),
+    case(
+        "face_before_vertices.obj",
+        2,
+        3,
+        "expected a vertex index, but no vertex is defined before this face, found '1'",
+    ),
+    case(
+        "bad_corner.obj",
+        4,
+        3,
+        "expected a face corner 'v', 'v/vt', 'v//vn' or 'v/vt/vn', found '1/1/1/1'",
+    ),
+    case(
+        "empty_face.obj",
+        4,
+        2,
+        "expected vertex indices after 'f', found end of line",
+    ),
+    case(
+        "nan_vertex.obj",
+        2,
+        5,
+        "expected a finite number, found 'nan'",
+    ),
+    case(
+        "inf_vertex.obj",
+        3,
+        7,
+        "expected a finite number, found '-inf'",
+    ),
+    case(
+        "short_vertex.obj",
+        2,
+        6,
+        "expected 3 numbers after 'v', found end of line",
+    ),
+    case(
+        "bad_number.obj",
+        3,
+        5,
+        "expected 3 numbers after 'v', found 'one'",
+    ),
+    case(
+        "binary.obj",
+        2,
+        118,
+        "expected UTF-8 text, found byte 0x80 (is this a binary file?)",
+    ),
 ];
 
 fn fixture(name: &str) -> PathBuf {
@@ -174,7 +404,12 @@ fn fixture(name: &str) -> PathBuf {
 fn every_fixture_fails_where_expected() {
     let mut failures = Vec::new();
     for c in CASES {
-        let err: ParseError = match load_scene(&fixture(c.file)) {
+        let path = fixture(c.file);
+        let loaded = match c.file.ends_with(".obj") {
+            true => load_obj(&path).map(drop),
+            false => load_scene(&path).map(drop),
+        };
+        let err: ParseError = match loaded {
             Ok(_) => {
                 failures.push(format!("{}: parsed without error", c.file));
                 continue;
@@ -196,14 +431,17 @@ fn every_fixture_fails_where_expected() {
 fn every_fixture_is_in_the_table() {
     let dir = fixture("");
     for entry in std::fs::read_dir(&dir).unwrap() {
-        let name = entry.unwrap().file_name().into_string().unwrap();
-        let listed = CASES.iter().any(|c| c.file == name);
+        let entry = entry.unwrap();
+        if entry.file_type().unwrap().is_dir() {
+            continue; // `directory.obj`, named by mesh_is_directory.txt
+        }
+        let name = entry.file_name().into_string().unwrap();
         assert!(
-            listed || name.ends_with(".obj"),
+            CASES.iter().any(|c| c.file == name),
             "{name} has no expected error"
         );
     }
-    assert!(CASES.len() >= 15);
+    assert!(CASES.len() >= 40, "only {} cases", CASES.len());
 }
 
 #[test]
@@ -266,4 +504,74 @@ proptest! {
             prop_assert!(e.line <= src.split('\n').count());
         }
     }
+}
+
+fn accepted(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/accepted")
+        .join(name)
+}
+
+/// Exponent notation is a number like any other (only `nan`/`inf` and the
+/// like are refused).
+#[test]
+fn exponent_notation_is_accepted() {
+    let scene = load_scene(&accepted("exponent_notation.txt")).unwrap();
+    let glint::scene::Camera::Perspective {
+        center, angle_deg, ..
+    } = scene.camera
+    else {
+        panic!("perspective camera expected");
+    };
+    assert_eq!(center.z, 10.0);
+    assert_eq!(angle_deg, 30.0);
+    assert_eq!(scene.background.color.x, 0.1);
+    let glint::scene::Light::Point { attenuation, .. } = scene.lights[0] else {
+        panic!("point light expected");
+    };
+    assert_eq!(attenuation.y, 1e-3);
+    assert_eq!(attenuation.z, 2.5e-4);
+    let mut radii = Vec::new();
+    if let glint::scene::Node::Group(children) = &scene.root {
+        for c in children {
+            if let glint::scene::Node::Shape {
+                shape: glint::scene::Shape::Sphere { radius, .. },
+                ..
+            } = c
+            {
+                radii.push(*radius);
+            }
+        }
+    }
+    assert_eq!(radii, [1.5, 5.0]);
+}
+
+/// Degenerate triangles are not an error: the scene loads, renders with
+/// shadows and reflections, every pixel is finite, and only the real
+/// triangles show.
+#[test]
+fn degenerate_triangles_render_with_finite_pixels() {
+    let mut job = glint::job::Job::new(accepted("degenerate_triangles.txt"), 32, 32);
+    job.integrator.shadows = true;
+    job.integrator.shade_back = true;
+    job.integrator.bounces = 3;
+    job.threads = Some(1);
+    let report = job.run().unwrap();
+    let f = &report.frame;
+    assert!(f.color.iter().all(|c| c.is_finite()));
+    assert!(f.normal.iter().all(|n| n.is_finite()));
+    assert!(f.depth.iter().all(|d| !d.is_nan()));
+    // Every hit is on one of the two real triangles, both facing +z.
+    let hits: Vec<_> = f
+        .normal
+        .iter()
+        .filter(|n| **n != glint::math::Vec3::ZERO)
+        .collect();
+    assert!(!hits.is_empty());
+    assert!(hits.iter().all(|n| (n.z - 1.0).abs() < 1e-6), "{hits:?}");
+    assert_eq!(
+        report.primitives,
+        4 + 4,
+        "degenerate ones are kept, harmlessly"
+    );
 }

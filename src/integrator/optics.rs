@@ -13,12 +13,18 @@ pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
 pub fn refract(d: Vec3, n: Vec3, n_i: f32, n_t: f32) -> Option<Vec3> {
     let eta = n_i / n_t;
     let cos_i = -d.dot(n);
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
-    if sin2_t > 1.0 {
+    // `eta · sin θi` rather than `eta² · sin² θi`: with an extreme index
+    // ratio `eta²` overflows, and `∞ · 0` at normal incidence was NaN.
+    let sin_t = eta * (1.0 - cos_i * cos_i).max(0.0).sqrt();
+    if sin_t > 1.0 {
         return None;
     }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    Some((eta * d + (eta * cos_i - cos_t) * n).normalize())
+    let cos_t = (1.0 - sin_t * sin_t).max(0.0).sqrt();
+    // The tangential part `d + cos θi·n` has length sin θi, so scaled by
+    // `eta` it has length sin θt and the sum is already unit length. The
+    // textbook `eta·d + (eta·cos θi - cos θt)·n` cancels catastrophically
+    // when `eta` is huge (both terms near ±eta·n: NaN after normalising).
+    Some((eta * (d + cos_i * n) - cos_t * n).normalize_or(-n))
 }
 
 #[cfg(test)]
@@ -54,6 +60,23 @@ mod tests {
         assert!(refract(steep, Vec3::Y, 1.5, 1.0).is_some());
         let grazing = Vec3::new(0.8, -0.6, 0.0); // 53.1°
         assert!(refract(grazing, Vec3::Y, 1.5, 1.0).is_none());
+    }
+
+    #[test]
+    fn extreme_index_ratios_stay_finite() {
+        for (n_i, n_t) in [(1.0, 3e38), (3e38, 1.0), (1.0, 1e-38), (1e-38, 1.0)] {
+            for d in [Vec3::NEG_Y, Vec3::new(1e-3, -1.0, 0.0).normalize()] {
+                if let Some(t) = refract(d, Vec3::Y, n_i, n_t) {
+                    assert!(t.is_finite(), "{n_i} -> {n_t}: {t}");
+                    assert!((t.length() - 1.0).abs() < 1e-5);
+                    assert!(t.y < 0.0);
+                }
+            }
+        }
+        // Into a huge index the ray bends onto the normal.
+        let d = Vec3::new(0.6, -0.8, 0.0);
+        let t = refract(d, Vec3::Y, 1.0, 3e38).unwrap();
+        assert!((t - Vec3::NEG_Y).length() < 1e-6);
     }
 
     #[test]

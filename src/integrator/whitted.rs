@@ -103,7 +103,9 @@ impl Whitted {
             if reflected == Vec3::ZERO {
                 continue; // nothing to shadow: no shadow ray needed
             }
-            if self.shadows {
+            // A light exactly at the point (zero direction) has nothing in
+            // between, and a zero-direction shadow ray would be meaningless.
+            if self.shadows && inc.to_light != Vec3::ZERO {
                 let shadow = Ray::new(offset_origin(p, n, inc.to_light), inc.to_light);
                 color +=
                     reflected * self.light_through(world, &shadow, inc.distance, depth, c, obs);

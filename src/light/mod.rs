@@ -18,8 +18,11 @@ pub struct Incident {
 /// What `light` sends to point `p`.
 pub fn incident(light: &Light, p: Vec3) -> Incident {
     match light {
+        // Directions are normalised in f64: in f32, the length of a vector
+        // longer than ~1e19 overflows (shorter than ~1e-19 underflows) and the
+        // light was silently lost.
         Light::Directional { direction, color } => Incident {
-            to_light: -direction.normalize_or_zero(),
+            to_light: -direction.as_dvec3().normalize_or_zero().as_vec3(),
             color: *color,
             distance: f32::INFINITY,
         },
@@ -28,12 +31,12 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
             color,
             attenuation,
         } => {
-            let d = *position - p;
+            let d = position.as_dvec3() - p.as_dvec3();
             let dist = d.length();
             Incident {
-                to_light: d.normalize_or_zero(),
-                color: *color * attenuation_factor(*attenuation, dist),
-                distance: dist,
+                to_light: d.normalize_or_zero().as_vec3(),
+                color: *color * attenuation_factor(*attenuation, dist as f32),
+                distance: dist as f32,
             }
         }
     }
@@ -74,6 +77,26 @@ mod tests {
         assert_eq!(i.to_light, Vec3::Y);
         assert_eq!(i.distance, 4.0);
         assert!((i.color.x - 1.0 / 16.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn huge_and_tiny_vectors_keep_their_direction() {
+        for scale in [1e38, 1e-40] {
+            let l = Light::Directional {
+                direction: Vec3::new(0.0, -2.0, 0.0) * scale,
+                color: Vec3::ONE,
+            };
+            assert_eq!(incident(&l, Vec3::ZERO).to_light, Vec3::Y, "{scale}");
+        }
+        let l = Light::Point {
+            position: Vec3::new(0.0, 3e38, 0.0),
+            color: Vec3::ONE,
+            attenuation: Vec3::X,
+        };
+        let i = incident(&l, Vec3::new(0.0, -3e38, 0.0));
+        assert_eq!(i.to_light, Vec3::Y);
+        assert_eq!(i.distance, f32::INFINITY);
+        assert_eq!(i.color, Vec3::ONE);
     }
 
     #[test]

@@ -37,9 +37,14 @@ impl CameraModel {
                 true,
             ),
         };
-        let direction = direction.normalize();
-        let horizontal = direction.cross(up).normalize();
-        let up = horizontal.cross(direction);
+        // In f64: an f32 `normalize` overflows to zero for vectors longer than
+        // ~1e19 and underflows for shorter than ~1e-19, and the cross product
+        // of a nearly parallel up vector can cancel to zero; any of these made
+        // every camera ray NaN. The parser has checked that the vectors are
+        // non-zero and not parallel, in f64.
+        let d = direction.as_dvec3().normalize();
+        let h = d.cross(up.as_dvec3()).normalize();
+        let (direction, horizontal, up) = (d.as_vec3(), h.as_vec3(), h.cross(d).as_vec3());
         Self {
             center,
             direction,

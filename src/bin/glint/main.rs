@@ -57,7 +57,7 @@ enum Command {
 struct RenderArgs {
     /// Scene file (MIT 6.837 format).
     scene: PathBuf,
-    /// Output image (.png, .tga, .ppm, .bmp).
+    /// Output image (.png, .tga, .ppm, .bmp; .exr, .pfm for unclamped float).
     #[arg(short, long)]
     output: PathBuf,
     /// Image size in pixels.

@@ -188,7 +188,7 @@ impl<'a> Parser<'a> {
         };
         let (mut place, mut color, mut attenuation) = (None, None, None);
         let close = self.fields(kw, names, |p, f| {
-            let v = Some(p.vec3()?.0);
+            let v = Some(p.vec3()?);
             match f.text {
                 "color" => color = v,
                 "attenuation" => attenuation = v,
@@ -196,8 +196,17 @@ impl<'a> Parser<'a> {
             }
             Ok(())
         })?;
-        let place = self.require(place, close, names[0], kw)?;
-        let color = self.require(color, close, "color", kw)?;
+        let (place, place_toks) = self.require(place, close, names[0], kw)?;
+        let color = self.require(color, close, "color", kw)?.0;
+        let attenuation = attenuation.map(|a| a.0);
+        // A directional light without a direction would light nothing.
+        if directional && place.as_dvec3().length_squared() == 0.0 {
+            return Err(self.error_found(
+                Some(place_toks[0]),
+                "a non-zero light direction",
+                vec_text(&place_toks),
+            ));
+        }
         Ok(match directional {
             true => Light::Directional {
                 direction: place,
