@@ -11,16 +11,77 @@ mod common;
 use common::*;
 
 /// Images whose reference we believe is wrong: (name, max mean abs, max fraction off, why).
-const EXCEPTIONS: &[(&str, f64, f64, &str)] = &[];
+///
+/// The checkerboard renders. The reference implementation (its source is
+/// public) has two quirks, both visible in these images:
+/// 1. its checker is `sin(3x)·sin(3y)·sin(3z) > 0`, cells of π/3 ≈ 1.047
+///    texture units instead of unit cells, so cell edges drift away from the
+///    texture origin (by a whole cell across scene7_02's floor of 0.1-unit
+///    cells);
+/// 2. it gives textured surfaces no ambient light (its checkerboard's ambient
+///    reflectance is 0), so every lit cell is 0.1-0.2 × 255 darker than ours;
+///    ambient light × the diffuse colour at the point, as for any material, is
+///    the physics.
+///
+/// `tests/textures.rs` reproduces exactly those two quirks and then matches
+/// these references to the standard tolerance (mean abs 0.2-0.5), so the
+/// pattern, its parity, the texture matrix and the world-space lookup are
+/// right. The bounds here are the measured differences plus ~10%: they only
+/// guard against the literal renders getting worse.
+const EXCEPTIONS: &[(&str, f64, f64, &str)] = &[
+    (
+        "output6_13.tga",
+        14.0,
+        0.70,
+        "sin checker, no ambient on textures (measured 12.5, 66%)",
+    ),
+    (
+        "output6_14.tga",
+        36.0,
+        0.42,
+        "sin checker, no ambient on textures (measured 33.2, 39%)",
+    ),
+    (
+        "output7_02.tga",
+        58.0,
+        0.78,
+        "sin checker, no ambient on textures (measured 54.6, 75%)",
+    ),
+    (
+        "output7_05a.tga",
+        37.0,
+        0.42,
+        "sin checker, no ambient on textures (measured 34.0, 39%)",
+    ),
+];
 
 const MAX_MEAN_ABS: f64 = 3.0;
 const MAX_FRAC_OFF: f64 = 0.02;
 
 fn check_assignment(file: &str) {
-    let dir = scratch(file);
+    check_lines(file, command_lines(file));
+}
+
+/// The lines of `file` that write one of `outputs`, run with `-grid` removed
+/// (see [`without_grid`]).
+fn check_outputs(file: &str, outputs: &[&str]) {
+    let lines = outputs
+        .iter()
+        .map(|o| {
+            let mut l = line_for(file, o);
+            l.args = without_grid(&l.args);
+            l
+        })
+        .collect();
+    check_lines(&format!("{file}-{}", outputs.join("-")), lines);
+}
+
+/// Runs `lines` in a scratch folder named after `tag` and compares every image.
+fn check_lines(tag: &str, lines: Vec<CmdLine>) {
+    let dir = scratch(tag);
     let mut failures = Vec::new();
     let mut checked = 0;
-    for line in command_lines(file) {
+    for line in lines {
         if let Err(e) = run_raytracer(&line.args, &dir) {
             failures.push(format!("{}\n    failed to run: {e}", line.text));
             continue;
@@ -70,4 +131,22 @@ fn assignment3_phong() {
 #[test]
 fn assignment4_shadows_reflection_refraction() {
     check_assignment("A4_cmd.txt");
+}
+
+/// The deterministic textured lines of assignment 6 (one ray per pixel; the
+/// `-visualize_grid` lines are out of scope). Noise, Marble and Wood cannot
+/// match another implementation pixel for pixel: their mean colours are
+/// checked in `tests/textures.rs`, which also shows that the checkerboards
+/// below match to the standard tolerance once the reference's two quirks
+/// (see `EXCEPTIONS`) are reproduced.
+#[test]
+fn assignment6_checkerboard_textures() {
+    check_outputs("A6_cmd.txt", &["output6_13.tga", "output6_14.tga"]);
+}
+
+/// Assignment 7's checkerboard scenes rendered with one ray per pixel (the
+/// sampling and filtering lines need flags `raytracer` does not have yet).
+#[test]
+fn assignment7_checkerboard_textures() {
+    check_outputs("A7_cmd.txt", &["output7_02.tga", "output7_05a.tga"]);
 }
