@@ -11,24 +11,70 @@ mod common;
 use common::*;
 
 /// Images whose reference we believe is wrong: (name, max mean abs, max fraction off, why).
-const EXCEPTIONS: &[(&str, f64, f64, &str)] = &[];
+///
+/// The checkerboard renders. The reference implementation (its source is
+/// public) has two quirks, both visible in these images:
+/// 1. its checker is `sin(3x)·sin(3y)·sin(3z) > 0`, cells of π/3 ≈ 1.047
+///    texture units instead of unit cells, so cell edges drift away from the
+///    texture origin (by a whole cell across scene7_02's floor of 0.1-unit
+///    cells);
+/// 2. it gives textured surfaces no ambient light (its checkerboard's ambient
+///    reflectance is 0), so every lit cell is 0.1-0.2 × 255 darker than ours;
+///    ambient light × the diffuse colour at the point, as for any material, is
+///    the physics.
+///
+/// `tests/textures.rs` reproduces exactly those two quirks and then matches
+/// these references to the standard tolerance (mean abs 0.2-0.5), so the
+/// pattern, its parity, the texture matrix and the world-space lookup are
+/// right. The bounds here are the measured differences plus ~10%: they only
+/// guard against the literal renders getting worse.
+const EXCEPTIONS: &[(&str, f64, f64, &str)] = &[
+    (
+        "output6_13.tga",
+        14.0,
+        0.70,
+        "sin checker, no ambient on textures (measured 12.5, 66%)",
+    ),
+    (
+        "output6_14.tga",
+        36.0,
+        0.42,
+        "sin checker, no ambient on textures (measured 33.2, 39%)",
+    ),
+    (
+        "output7_02.tga",
+        58.0,
+        0.78,
+        "sin checker, no ambient on textures (measured 54.6, 75%)",
+    ),
+    (
+        "output7_05a.tga",
+        37.0,
+        0.42,
+        "sin checker, no ambient on textures (measured 34.0, 39%)",
+    ),
+];
 
 const MAX_MEAN_ABS: f64 = 3.0;
 const MAX_FRAC_OFF: f64 = 0.02;
 
-fn check_assignment(file: &str) {
-    assert!(check_lines(file, &[]) > 0, "no image was checked");
+/// Every image-writing line of `file` except textured scenes (checked by
+/// [`check_outputs`] and `tests/textures.rs`) and grid visualizations.
+fn plain_lines(file: &str) -> Vec<CmdLine> {
+    command_lines(file)
+        .into_iter()
+        .filter(|l| !textured_or_visualization(l))
+        .collect()
 }
 
-/// Whether a command line's scene uses solid textures (their own issue) or
-/// asks for a grid visualization (not a render to compare).
+fn check_assignment(file: &str) {
+    check_lines(file, plain_lines(file));
+}
+
+/// Whether a command line's scene uses solid textures or asks for a grid
+/// visualization (not a render to compare).
 fn textured_or_visualization(line: &CmdLine) -> bool {
-    let scene = line
-        .args
-        .iter()
-        .position(|a| a == "-input")
-        .map(|i| line.args[i + 1].clone())
-        .unwrap_or_default();
+    let scene = flag_value(&line.args, "-input").unwrap_or_default();
     let text =
         std::fs::read_to_string(std::path::Path::new(SCENES).join(scene)).unwrap_or_default();
     line.args.iter().any(|a| a.starts_with("-visualize_grid"))
@@ -37,24 +83,20 @@ fn textured_or_visualization(line: &CmdLine) -> bool {
             .any(|k| text.contains(k))
 }
 
-/// Renders every image-writing line of `file` (minus textured scenes and
-/// visualizations) with `extra` flags appended and compares each output with
-/// its reference. Returns how many images matched; panics listing mismatches.
-fn check_lines(file: &str, extra: &[&str]) -> usize {
-    let dir = scratch(&format!("{file}{}", extra.join("")));
+/// The lines of `file` that write one of `outputs`, exactly as written.
+fn check_outputs(file: &str, outputs: &[&str]) {
+    let lines = outputs.iter().map(|o| line_for(file, o)).collect();
+    check_lines(&format!("{file}-{}", outputs.join("-")), lines);
+}
+
+/// Runs `lines` in a scratch folder named after `tag` and compares every
+/// image; returns how many matched, panics listing the mismatches.
+fn check_lines(tag: &str, lines: Vec<CmdLine>) -> usize {
+    let dir = scratch(tag);
     let mut failures = Vec::new();
     let mut checked = 0;
-    for line in command_lines(file) {
-        if textured_or_visualization(&line) {
-            continue;
-        }
-        let args: Vec<String> = line
-            .args
-            .iter()
-            .cloned()
-            .chain(extra.iter().map(|s| s.to_string()))
-            .collect();
-        if let Err(e) = run_raytracer(&args, &dir) {
+    for line in lines {
+        if let Err(e) = run_raytracer(&line.args, &dir) {
             failures.push(format!("{}\n    failed to run: {e}", line.text));
             continue;
         }
@@ -78,9 +120,11 @@ fn check_lines(file: &str, extra: &[&str]) -> usize {
     let _ = std::fs::remove_dir_all(&dir);
     assert!(
         failures.is_empty(),
-        "{file} {extra:?}: {checked} images matched; mismatches:\n{}",
+        "{} images matched; mismatches:\n{}",
+        checked,
         failures.join("\n")
     );
+    assert!(checked > 0, "no image was checked");
     checked
 }
 
@@ -104,10 +148,28 @@ fn assignment4_shadows_reflection_refraction() {
     check_assignment("A4_cmd.txt");
 }
 
-/// Assignment 6's renders (bunnies up to 40k triangles, transforms, mirrors,
-/// glass) with every accelerator: the line's own `-grid` size is kept for the
-/// grid (`-accel grid` after `-grid nx ny nz` keeps the resolution), and
-/// lines without `-grid` run the grid at its automatic resolution.
+/// The deterministic textured lines of assignment 6 (one ray per pixel; the
+/// `-visualize_grid` lines are out of scope). Noise, Marble and Wood cannot
+/// match another implementation pixel for pixel: their mean colours are
+/// checked in `tests/textures.rs`, which also shows that the checkerboards
+/// below match to the standard tolerance once the reference's two quirks
+/// (see `EXCEPTIONS`) are reproduced.
+#[test]
+fn assignment6_checkerboard_textures() {
+    check_outputs("A6_cmd.txt", &["output6_13.tga", "output6_14.tga"]);
+}
+
+/// Assignment 7's checkerboard scenes rendered with one ray per pixel (the
+/// sampling and filtering lines need flags `raytracer` does not have yet).
+#[test]
+fn assignment7_checkerboard_textures() {
+    check_outputs("A7_cmd.txt", &["output7_02.tga", "output7_05a.tga"]);
+}
+
+/// Assignment 6's untextured renders (bunnies up to 40k triangles,
+/// transforms, mirrors, glass) with every accelerator: the line's own `-grid`
+/// size is kept for the grid (`-accel grid` after `-grid nx ny nz` keeps the
+/// resolution); lines without `-grid` run the grid at its automatic resolution.
 #[test]
 fn assignment6_with_every_accelerator() {
     for accel in [
@@ -118,7 +180,14 @@ fn assignment6_with_every_accelerator() {
         "bvh-median",
         "bvh-midpoint",
     ] {
-        let n = check_lines("A6_cmd.txt", &["-accel", accel]);
+        let lines = plain_lines("A6_cmd.txt")
+            .into_iter()
+            .map(|mut l| {
+                l.args.extend(["-accel".to_string(), accel.to_string()]);
+                l
+            })
+            .collect();
+        let n = check_lines(&format!("A6-{accel}"), lines);
         assert!(n >= 20, "{accel}: only {n} images checked");
     }
 }

@@ -93,8 +93,10 @@ impl Whitted {
         // The shading normal faces the side the ray came from.
         let n = if back { -hit.normal } else { hit.normal };
         let p = hit.point;
-        let p_obj = world.object_from_world[hit.instance as usize].transform_point3(p);
-        let m = eval(&world.materials, hit.material, p_obj);
+        // Textures are looked up at the world-space point: the 6.837 format's
+        // texture matrix maps world points into texture space (see
+        // `material::eval`).
+        let m = eval(&world.materials, hit.material, p);
 
         let mut color = world.background.ambient * m.diffuse;
         for light in &world.lights {
@@ -191,8 +193,7 @@ impl Whitted {
                 return filter;
             };
             obs.ray(RayKind::Shadow, &ray, h.t, depth, 0.0, Some(h.normal));
-            let p_obj = world.object_from_world[h.instance as usize].transform_point3(h.point);
-            filter *= eval(&world.materials, h.material, p_obj).transparent;
+            filter *= eval(&world.materials, h.material, h.point).transparent;
             if filter == Vec3::ZERO {
                 return filter;
             }

@@ -19,8 +19,10 @@ pub struct Primitive {
     pub shape: Shape,
     /// Index into [`World::materials`].
     pub material: u32,
-    /// Index into [`World::object_from_world`]: textures are evaluated in the
-    /// object's own space even when its geometry was baked into world space.
+    /// Index into [`World::object_from_world`]: the object space the shape
+    /// came from, kept although its geometry was baked into world space.
+    /// The 6.837 textures do *not* use it (their matrices map world points,
+    /// see [`crate::material::eval`]); it is there for object-space lookups.
     pub instance: u32,
 }
 

@@ -121,3 +121,65 @@ pub fn scratch(name: &str) -> PathBuf {
 pub fn reference_for(name: &str) -> PathBuf {
     Path::new(REFERENCE).join(Path::new(name).with_extension("png"))
 }
+
+/// The line of `commands/<file>` that writes `output` (e.g. `output6_13.tga`).
+pub fn line_for(file: &str, output: &str) -> CmdLine {
+    command_lines(file)
+        .into_iter()
+        .find(|l| l.outputs.iter().any(|o| o == output))
+        .unwrap_or_else(|| panic!("{file} has no line writing {output}"))
+}
+
+/// The value after `flag` in `args`.
+pub fn flag_value<'a>(args: &'a [String], flag: &str) -> Option<&'a str> {
+    let i = args.iter().position(|a| a == flag)?;
+    args.get(i + 1).map(String::as_str)
+}
+
+/// Per-channel mean of 8-bit RGB pixels, on the 0-255 scale.
+pub fn mean_rgb(pixels: &[[u8; 3]]) -> [f64; 3] {
+    let mut sum = [0f64; 3];
+    for p in pixels {
+        for c in 0..3 {
+            sum[c] += p[c] as f64;
+        }
+    }
+    sum.map(|s| s / pixels.len().max(1) as f64)
+}
+
+/// Per-channel relative difference of two mean colours: `(ours - ref) / ref`.
+pub fn relative_mean_diff(ours: [f64; 3], reference: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|c| (ours[c] - reference[c]) / reference[c])
+}
+
+/// The pixels of an image file, row-major, top row first.
+pub fn load_rgb8(path: &Path) -> Result<(u32, u32, Vec<[u8; 3]>), String> {
+    let img = image::open(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .to_rgb8();
+    let (w, h) = img.dimensions();
+    Ok((w, h, img.pixels().map(|p| p.0).collect()))
+}
+
+/// [`Diff`] of two equally long pixel lists.
+pub fn diff_pixels(a: &[[u8; 3]], b: &[[u8; 3]]) -> Diff {
+    assert_eq!(a.len(), b.len(), "pixel counts differ");
+    let mut sum = 0u64;
+    let mut off = 0u64;
+    for (pa, pb) in a.iter().zip(b) {
+        let mut worst = 0;
+        for c in 0..3 {
+            let d = (pa[c] as i32 - pb[c] as i32).unsigned_abs();
+            sum += d as u64;
+            worst = worst.max(d);
+        }
+        if worst > 24 {
+            off += 1;
+        }
+    }
+    let n = a.len().max(1) as f64;
+    Diff {
+        mean_abs: sum as f64 / (3.0 * n),
+        frac_off: off as f64 / n,
+    }
+}
