@@ -411,6 +411,32 @@ impl Report {
     }
 }
 
+/// Runs a binary's `main` body so that a bug in glint reaches the user as one
+/// line naming it an internal error, with exit status 1, and never as a Rust
+/// panic message with a backtrace hint.
+pub fn run_guarded(
+    program: &'static str,
+    body: impl FnOnce() -> std::process::ExitCode,
+) -> std::process::ExitCode {
+    std::panic::set_hook(Box::new(move |info| {
+        let place = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        let what = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        eprintln!("{program}: internal error (a bug in glint, please report it): {what}{place}");
+    }));
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(body)) {
+        Ok(code) => code,
+        Err(_) => std::process::ExitCode::from(1),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,6 +8,7 @@
 //! be run against every acceleration structure (`AccelKind`) as they appear.
 
 use glint::integrator::{RayKind, RayObserver, Whitted};
+use glint::material::TextureSpace;
 use glint::math::{Mat4, Ray, Vec3};
 use glint::render::{render, screen_point, CameraModel, Frame, PixelOffset};
 use glint::scene::{
@@ -507,13 +508,16 @@ fn integrators() -> Vec<Whitted> {
     let mut out = Vec::new();
     for transparent_shadows in [false, true] {
         for shade_back in [false, true] {
-            out.push(Whitted {
-                bounces: 6,
-                weight_cutoff: 0.0,
-                shadows: true,
-                shade_back,
-                transparent_shadows,
-            });
+            for texture_space in [TextureSpace::World, TextureSpace::Object] {
+                out.push(Whitted {
+                    bounces: 6,
+                    weight_cutoff: 0.0,
+                    shadows: true,
+                    shade_back,
+                    transparent_shadows,
+                    texture_space,
+                });
+            }
         }
     }
     out

@@ -338,3 +338,91 @@ fn documentation_examples_parse() {
         assert!(Path::new(&format!("docs/images/texture_{t}.png")).is_file());
     }
 }
+
+/// With object-space lookups a texture moves with its object; with
+/// world-space lookups (the 6.837 convention) it stays put in the world.
+#[test]
+fn object_space_textures_follow_their_object() {
+    use glint::integrator::{NoObserver, RayKind};
+    use glint::material::TextureSpace;
+    use glint::math::{Mat4, Ray, Vec3};
+    use glint::scene::{Background, Camera, Material, Node, Phong, Scene, Shape, TextureKind};
+    use glint::stats::Counters;
+    use glint::world::{BuildOptions, World};
+
+    let red = Phong {
+        diffuse: Vec3::X,
+        ..Phong::default()
+    };
+    let blue = Phong {
+        diffuse: Vec3::Z,
+        ..Phong::default()
+    };
+    let scene_at = |shift: f32| Scene {
+        camera: Camera::Orthographic {
+            center: Vec3::new(0.0, 0.0, 5.0),
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            size: 4.0,
+        },
+        lights: vec![],
+        background: Background {
+            color: Vec3::ZERO,
+            ambient: Vec3::ONE,
+        },
+        materials: vec![
+            Material::Phong(red),
+            Material::Phong(blue),
+            Material::Texture {
+                kind: TextureKind::Checkerboard,
+                transform: Mat4::IDENTITY,
+                a: 0,
+                b: 1,
+            },
+        ],
+        root: Node::Transform {
+            matrix: Mat4::from_translation(Vec3::new(shift, 0.0, 0.0)),
+            child: Box::new(Node::Shape {
+                shape: Shape::Plane {
+                    normal: Vec3::Z,
+                    offset: 0.0,
+                },
+                material: Some(2),
+            }),
+        },
+    };
+    let colour_at = |scene: &Scene, x: f32, space: TextureSpace| {
+        let world = World::build(scene, BuildOptions::default());
+        let w = Whitted {
+            texture_space: space,
+            ..Whitted::default()
+        };
+        let ray = Ray::new(Vec3::new(x, 0.5, 5.0), Vec3::NEG_Z);
+        w.trace(
+            &world,
+            &ray,
+            0.0,
+            RayKind::Primary,
+            0,
+            1.0,
+            &mut Counters::default(),
+            &mut NoObserver,
+        )
+        .0
+    };
+    let (still, moved) = (scene_at(0.0), scene_at(1.0));
+    // Object space: the point 0.5 units into the object is the same cell before and after the move.
+    assert_eq!(
+        colour_at(&still, 0.5, TextureSpace::Object),
+        colour_at(&moved, 1.5, TextureSpace::Object)
+    );
+    // World space: the same world point keeps its colour, so the moved object's cell differs.
+    assert_eq!(
+        colour_at(&still, 0.5, TextureSpace::World),
+        colour_at(&moved, 0.5, TextureSpace::World)
+    );
+    assert_ne!(
+        colour_at(&moved, 1.5, TextureSpace::World),
+        colour_at(&moved, 1.5, TextureSpace::Object)
+    );
+}

@@ -3,12 +3,17 @@
 
 use glint::accel::AccelKind;
 use glint::job::Job;
+use glint::material::TextureSpace;
 use glint::render::PixelOffset;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    glint::job::run_guarded("raytracer", real_main)
+}
+
+fn real_main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (mut job, stats) = match parse(&args) {
         Ok(j) => j,
@@ -91,6 +96,17 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 );
             }
             "-no_flatten" => job.build.flatten = false,
+            "-texture_space" => {
+                job.integrator.texture_space = match value("world or object")?.as_str() {
+                    "world" => TextureSpace::World,
+                    "object" => TextureSpace::Object,
+                    other => {
+                        return Err(format!(
+                            "-texture_space: expected world or object, found '{other}'"
+                        ))
+                    }
+                }
+            }
             "-stats_json" => job.stats_json = Some(PathBuf::from(value("a file")?)),
             other => match PREVIEW_ONLY.iter().find(|(f, _)| *f == other) {
                 Some((f, n)) => {

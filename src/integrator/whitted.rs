@@ -5,7 +5,7 @@
 use super::optics::{reflect, refract};
 use super::{RayKind, RayObserver};
 use crate::light::incident;
-use crate::material::{eval, phong_light};
+use crate::material::{eval, phong_light, TextureSpace};
 use crate::math::{offset_origin, Ray, Vec3};
 use crate::stats::Counters;
 use crate::world::{Hit, World};
@@ -25,6 +25,8 @@ pub struct Whitted {
     /// Let light through transparent occluders, filtered by their
     /// `transparentColor`, instead of the course's opaque shadows.
     pub transparent_shadows: bool,
+    /// Space in which textures are looked up.
+    pub texture_space: TextureSpace,
 }
 
 impl Default for Whitted {
@@ -35,6 +37,7 @@ impl Default for Whitted {
             shadows: false,
             shade_back: false,
             transparent_shadows: false,
+            texture_space: TextureSpace::World,
         }
     }
 }
@@ -93,10 +96,11 @@ impl Whitted {
         // The shading normal faces the side the ray came from.
         let n = if back { -hit.normal } else { hit.normal };
         let p = hit.point;
-        // Textures are looked up at the world-space point: the 6.837 format's
-        // texture matrix maps world points into texture space (see
-        // `material::eval`).
-        let m = eval(&world.materials, hit.material, p);
+        let m = eval(
+            &world.materials,
+            hit.material,
+            self.texture_point(world, hit),
+        );
 
         let mut color = world.background.ambient * m.diffuse;
         for light in &world.lights {
@@ -157,6 +161,18 @@ impl Whitted {
         color
     }
 
+    /// The point handed to the material: the world-space hit (the 6.837
+    /// scenes' texture matrices map world points) or, on request, the hit in
+    /// its object's space.
+    fn texture_point(&self, world: &World, hit: &Hit) -> Vec3 {
+        match self.texture_space {
+            TextureSpace::World => hit.point,
+            TextureSpace::Object => {
+                world.object_from_world[hit.instance as usize].transform_point3(hit.point)
+            }
+        }
+    }
+
     /// Fraction of a light's colour that reaches the end of `shadow` at
     /// `distance`: 0 or 1 with opaque shadows; with transparent shadows the
     /// product of the `transparentColor` of everything in between.
@@ -193,7 +209,7 @@ impl Whitted {
                 return filter;
             };
             obs.ray(RayKind::Shadow, &ray, h.t, depth, 0.0, Some(h.normal));
-            filter *= eval(&world.materials, h.material, h.point).transparent;
+            filter *= eval(&world.materials, h.material, self.texture_point(world, &h)).transparent;
             if filter == Vec3::ZERO {
                 return filter;
             }

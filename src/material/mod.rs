@@ -10,6 +10,20 @@ pub use phong::phong_light;
 pub use texture::pattern;
 
 use crate::math::Vec3;
+
+/// Where a hit point is taken before a texture's own matrix maps it into
+/// texture space.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TextureSpace {
+    /// The world-space hit point: what the 6.837 scenes are written for (their
+    /// texture matrices already contain the inverse of the object's transform;
+    /// see `ARCHITECTURE.md`).
+    #[default]
+    World,
+    /// The hit point in the space of the object's innermost transform, so a
+    /// texture sticks to its object wherever the scene moves it.
+    Object,
+}
 use crate::scene::{Material, Phong};
 
 /// The Phong parameters of material `index` at the **world-space** hit point

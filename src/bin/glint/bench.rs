@@ -73,6 +73,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         shadows: true,
         shade_back: true,
         transparent_shadows: false,
+        ..Whitted::default()
     };
     println!(
         "{}x{} pixels, shadows, shade_back, 5 bounces; median of {} runs; {} threads\n",

@@ -4,6 +4,7 @@ use clap::{Args, Parser, Subcommand};
 use glint::accel::AccelKind;
 use glint::format::load_scene;
 use glint::job::Job;
+use glint::material::TextureSpace;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -93,6 +94,9 @@ struct RenderArgs {
     /// Write statistics as JSON to this file.
     #[arg(long, value_name = "FILE")]
     stats_json: Option<PathBuf>,
+    /// Where textures are looked up: world (what 6.837 scenes are written for) or object (textures stick to moving objects).
+    #[arg(long, value_enum, default_value_t = Space::World)]
+    texture_space: Space,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -104,7 +108,18 @@ struct RenderArgs {
     normals: Option<PathBuf>,
 }
 
+/// Command-line names of [`TextureSpace`].
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Space {
+    World,
+    Object,
+}
+
 fn main() -> ExitCode {
+    glint::job::run_guarded("glint", real_main)
+}
+
+fn real_main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Render(a) => render(a),
@@ -143,6 +158,10 @@ fn render(a: RenderArgs) -> ExitCode {
     job.integrator.shade_back = a.shade_back;
     job.threads = a.threads;
     job.build.accel = a.accel;
+    job.integrator.texture_space = match a.texture_space {
+        Space::World => TextureSpace::World,
+        Space::Object => TextureSpace::Object,
+    };
     job.build.flatten = !a.no_flatten;
     job.stats_json = a.stats_json;
     job.progress = !a.quiet && std::io::stdout().is_terminal();
