@@ -242,5 +242,8 @@ fn hdr_outputs_by_extension() {
     assert!(pfm.starts_with(b"PF\n40 30\n-1.0\n"));
     assert_eq!(pfm.len(), 14 + 40 * 30 * 12);
     let exr = std::fs::read(dir.join("out.exr")).unwrap();
-    assert!(exr.starts_with(&[0x76, 0x2f, 0x31, 0x01]), "EXR magic number");
+    assert!(
+        exr.starts_with(&[0x76, 0x2f, 0x31, 0x01]),
+        "EXR magic number"
+    );
 }
