@@ -20,6 +20,12 @@ pub fn load_obj(path: &Path) -> Result<Mesh, ParseError> {
     })
 }
 
+/// Parses OBJ text already in memory; `path` is only used in messages. The
+/// same checks as [`load_obj`], without touching the disk.
+pub fn load_obj_from_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
+    parse_obj(bytes, path)
+}
+
 /// Why a mesh could not be loaded: the scene parser reports an unreadable
 /// file at the `obj_file` token that named it, and bad contents in the OBJ.
 pub(crate) enum LoadError {

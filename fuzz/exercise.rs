@@ -1,0 +1,114 @@
+//! What the fuzz targets do with one input, shared with `tests/fuzz_corpus.rs`
+//! (which replays the committed corpora through exactly this code under
+//! `cargo test`). Both functions must return normally for every input: a
+//! panic is a crash.
+
+use glint::format::{obj::load_obj_from_bytes, parse_scene};
+use glint::integrator::{NoObserver, RayKind, Whitted};
+use glint::math::{Vec2, Vec3};
+use glint::render::{screen_point, CameraModel};
+use glint::scene::{Background, Camera, Node, Scene, Shape};
+use glint::stats::Counters;
+use glint::world::{BuildOptions, World};
+use std::path::Path;
+use std::sync::Arc;
+
+/// Scene text (lossily decoded) through the parser; a scene it accepts is
+/// built into a world (flattened and not) and a few camera rays are traced
+/// through the whole ray tree.
+pub fn scene(data: &[u8]) {
+    let src = String::from_utf8_lossy(data);
+    let scene = match parse_scene(&src, Path::new("fuzz.txt")) {
+        Ok(s) => s,
+        Err(e) => {
+            // Rendering the diagnostic walks the source line to the column.
+            let _ = e.render();
+            return;
+        }
+    };
+    let _ = scene.summary();
+    trace_a_few(&scene);
+}
+
+/// OBJ bytes through the mesh reader; a mesh it accepts must have in-range
+/// indices and finite positions, and is built into a world and hit with rays.
+pub fn obj(data: &[u8]) {
+    let mesh = match load_obj_from_bytes(data, Path::new("fuzz.obj")) {
+        Ok(m) => m,
+        Err(e) => {
+            let _ = e.render();
+            return;
+        }
+    };
+    let n = mesh.positions.len();
+    assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
+    assert!(mesh.positions.iter().all(|p| p.is_finite()));
+    let scene = Scene {
+        camera: Camera::Perspective {
+            center: Vec3::new(0.0, 0.0, 10.0),
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            angle_deg: 30.0,
+        },
+        lights: vec![],
+        background: Background::default(),
+        materials: vec![],
+        root: Node::Group(vec![Node::Shape {
+            shape: Shape::Mesh(Arc::new(mesh)),
+            material: None,
+        }]),
+    };
+    trace_a_few(&scene);
+}
+
+/// Builds `scene` both ways and traces a 3x3 grid of camera rays with every
+/// integrator feature on. A hit reached by a finite ray must have a `t` and a
+/// normal that are not NaN.
+fn trace_a_few(scene: &Scene) {
+    let camera = CameraModel::new(&scene.camera);
+    for flatten in [true, false] {
+        let world = World::build(
+            scene,
+            BuildOptions {
+                flatten,
+                ..BuildOptions::default()
+            },
+        );
+        let _ = world.bounds();
+        for transparent_shadows in [false, true] {
+            let integrator = Whitted {
+                bounces: 3,
+                weight_cutoff: 0.01,
+                shadows: true,
+                shade_back: true,
+                transparent_shadows,
+                // Both lookup spaces, without doubling the work per input.
+                texture_space: if transparent_shadows {
+                    glint::material::TextureSpace::Object
+                } else {
+                    glint::material::TextureSpace::World
+                },
+            };
+            let mut c = Counters::default();
+            for j in 0..3 {
+                for i in 0..3 {
+                    let ray = camera.ray(screen_point(i, j, Vec2::splat(0.5), 3, 3));
+                    let (_color, hit) = integrator.trace(
+                        &world,
+                        &ray,
+                        camera.tmin(),
+                        RayKind::Primary,
+                        0,
+                        1.0,
+                        &mut c,
+                        &mut NoObserver,
+                    );
+                    if let Some(h) = hit.filter(|_| ray.origin.is_finite() && ray.dir.is_finite()) {
+                        assert!(!h.t.is_nan(), "NaN t for {ray:?}");
+                        assert!(!h.normal.is_nan(), "NaN normal for {ray:?}: {h:?}");
+                    }
+                }
+            }
+        }
+    }
+}
