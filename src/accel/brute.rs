@@ -1,7 +1,7 @@
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray};
 use crate::stats::Counters;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// Tests every primitive: the baseline every accelerator is measured against.
 pub struct Brute {

@@ -43,7 +43,7 @@ pub use octree::Octree;
 
 use crate::math::{Aabb, Ray};
 use crate::stats::Counters;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// The closest hit an aggregate found: parameter and primitive index.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -5,33 +5,12 @@
 mod build;
 
 pub use build::BuildOptions;
+pub use crate::primitive::Primitive;
 
 use crate::accel::Aggregate;
 use crate::math::{Aabb, Mat4, Ray, Vec3};
 use crate::scene::{Background, Light, Material};
-use crate::shape::Shape;
 use crate::stats::Counters;
-
-/// A shape with its material and the object space it came from.
-#[derive(Clone, Debug)]
-pub struct Primitive {
-    /// World-space geometry.
-    pub shape: Shape,
-    /// Index into [`World::materials`].
-    pub material: u32,
-    /// Index into [`World::object_from_world`]: the object space the shape
-    /// came from, kept although its geometry was baked into world space.
-    /// The 6.837 textures do *not* use it (their matrices map world points,
-    /// see [`crate::material::eval`]); it is there for object-space lookups.
-    pub instance: u32,
-}
-
-impl Primitive {
-    /// World-space bounds.
-    pub fn bounds(&self) -> Aabb {
-        self.shape.bounds()
-    }
-}
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq)]

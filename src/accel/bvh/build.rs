@@ -4,7 +4,7 @@ use super::split::{choose, Item};
 use super::{Bvh, Node, Split};
 use crate::accel::overlap::{margin, padded};
 use crate::math::Aabb;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// Builds the BVH over `ids`.
 pub(super) fn build(prims: &[Primitive], ids: Vec<u32>, split: Split) -> Bvh {

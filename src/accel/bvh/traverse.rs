@@ -11,7 +11,7 @@ use super::Bvh;
 use crate::accel::PrimHit;
 use crate::math::Ray;
 use crate::stats::Counters;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// Entries of the traversal stack: one per level at most, and the builder
 /// keeps the tree within `FORCE_MEDIAN_DEPTH + 32` levels.

@@ -3,7 +3,7 @@
 use super::{Grid, Lattice};
 use crate::accel::overlap::{margin, padded, shape_overlaps};
 use crate::math::Aabb;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// Most cells per axis the automatic resolution picks: 128³ ≈ 2M cells
 /// (8 MB of offsets) is past the point where more cells pay for themselves

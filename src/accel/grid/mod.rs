@@ -18,7 +18,7 @@ use super::mailbox::Mailbox;
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::stats::Counters;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// The geometry of the grid: where its cells are. Cell `i` along axis `a`
 /// spans the planes [`Lattice::plane`]`(a, i)` to `plane(a, i + 1)`; building

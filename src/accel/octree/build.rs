@@ -3,7 +3,7 @@
 use super::{child_box, child_codes, split_axes, Node, Octree, LEAF_SIZE, MAX_DEPTH};
 use crate::accel::overlap::{margin, padded, shape_overlaps};
 use crate::math::Aabb;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// Builds the tree over `ids`.
 pub(super) fn build(prims: &[Primitive], ids: &[u32]) -> Octree {

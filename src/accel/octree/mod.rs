@@ -26,7 +26,7 @@ use super::mailbox::Mailbox;
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::stats::Counters;
-use crate::world::Primitive;
+use crate::primitive::Primitive;
 
 /// A node holding at most this many primitives is not split.
 pub const LEAF_SIZE: usize = 8;
