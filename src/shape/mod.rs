@@ -12,7 +12,7 @@ mod triangle;
 pub use plane::Plane;
 pub use sphere::Sphere;
 pub use transformed::Transformed;
-pub use triangle::Triangle;
+pub use triangle::{intersect_triangle, Triangle, TriangleHit, WatertightRay};
 
 use crate::math::{Aabb, Ray, Vec3};
 
