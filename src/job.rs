@@ -191,7 +191,7 @@ impl Job {
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
-        let camera = CameraModel::new(&scene.camera);
+        let camera = CameraModel::new(&world.camera);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.threads.unwrap_or(0))
             .build()

@@ -17,7 +17,8 @@
 //! [`WatertightRay`] (the per-ray permutation and shear), so an accelerator
 //! that stores vertices its own way calls the identical arithmetic.
 
-use crate::math::{gamma, Aabb, Ray, Vec3};
+use super::plane::project_onto_plane;
+use crate::math::{gamma, Aabb, Ray, SurfacePoint, Vec3};
 
 /// The per-ray data of the watertight test: the ray's origin, the axis
 /// permutation that makes the direction's largest component `z`, and the
@@ -196,6 +197,31 @@ impl Triangle {
         self.hit(ray, tmin, tmax).map(|h| h.t)
     }
 
+    /// The hit at parameter `t` of `ray`, from barycentric interpolation
+    /// (pbrt-v4): `p = Σ b_i·p_i` lies in the triangle's plane up to the
+    /// rounding of three products and two sums and of the barycentrics
+    /// themselves, bounded by `γ(7)·Σ|b_i·p_i|`. The barycentrics come from
+    /// re-running the identical test (it is deterministic), once per closest
+    /// hit rather than for every candidate.
+    pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
+        let [p0, p1, p2] = self.v;
+        match self.hit(ray, f32::NEG_INFINITY, f32::INFINITY) {
+            Some(TriangleHit {
+                b: [b0, b1, b2], ..
+            }) => {
+                let (q0, q1, q2) = (b0 * p0, b1 * p1, b2 * p2);
+                SurfacePoint {
+                    p: q0 + q1 + q2,
+                    error: gamma(7) * (q0.abs() + q1.abs() + q2.abs()),
+                    n: self.normal,
+                }
+            }
+            // Unreachable for a `t` this triangle reported; the projection
+            // onto its plane is the safe answer anyway.
+            None => project_onto_plane(ray.at(t), self.normal, self.normal.dot(p0)),
+        }
+    }
+
     /// Bounding box of the three vertices.
     pub fn bounds(&self) -> Aabb {
         Aabb::from_points(self.vertices())
@@ -294,5 +320,27 @@ mod tests {
             t.hit(&r, 0.0, f32::INFINITY)
         );
         assert!(t.hit(&r, 0.0, f32::INFINITY).is_some());
+    }
+
+    #[test]
+    fn interpolated_point_is_in_the_plane_within_its_error() {
+        let t = Triangle::new(
+            Vec3::new(1e5, 3.0, -2e4),
+            Vec3::new(1e5 + 7.0, 5.5, -2e4 + 1.0),
+            Vec3::new(1e5 + 1.0, -4.0, -2e4 + 6.0),
+        );
+        let from = Vec3::new(0.0, 100.0, 0.0);
+        let r = Ray::new(from, (t.v[0] + t.v[1] + t.v[2]) / 3.0 - from);
+        let h = t.intersect(&r, 0.0, f32::INFINITY).unwrap();
+        let sp = t.surface(&r, h);
+        let (a, b, c) = (t.v[0].as_dvec3(), t.v[1].as_dvec3(), t.v[2].as_dvec3());
+        let n = (b - a).cross(c - a).normalize();
+        let dist = n.dot(sp.p.as_dvec3() - a);
+        assert!(
+            dist.abs() <= sp.error.as_dvec3().dot(n.abs()),
+            "{dist} vs {}",
+            sp.error
+        );
+        assert!((sp.p - r.at(h)).length() < 0.1);
     }
 }
