@@ -119,13 +119,19 @@ pub fn intersect_triangle(
     if tmin >= 0.0 {
         // pbrt-v4's bound on the error of t, from the errors of the
         // transformed coordinates (conservative here: our edge functions
-        // are more accurate than the f32 ones it assumes).
+        // are more accurate than the f32 ones it assumes). One change: the
+        // x and y errors use the *unscaled* z (the shear adds `s·z` with
+        // `|s| ≤ 1`), where pbrt uses z scaled by `1/d_z`; with the short
+        // directions of rays carried into a large transform's object space
+        // (`|d| ~ 1e-3`), pbrt's form overstates deltaT a thousandfold and
+        // rejects real hits.
         let max_z = az.abs().max(bz.abs()).max(cz.abs());
+        let max_z_unscaled = a.z.abs().max(b.z.abs()).max(c.z.abs());
         let max_x = a.x.abs().max(b.x.abs()).max(c.x.abs());
         let max_y = a.y.abs().max(b.y.abs()).max(c.y.abs());
         let delta_z = gamma(3) * max_z;
-        let delta_x = gamma(5) * (max_x + max_z);
-        let delta_y = gamma(5) * (max_y + max_z);
+        let delta_x = gamma(5) * (max_x + max_z_unscaled);
+        let delta_y = gamma(5) * (max_y + max_z_unscaled);
         let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
         let max_e = e0.abs().max(e1.abs()).max(e2.abs()) as f32;
         let delta_t = 3.0
