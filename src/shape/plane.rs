@@ -42,7 +42,7 @@ impl Plane {
 
     /// The hit at parameter `t` of `ray`: `ray.at(t)` projected onto the
     /// plane (the projection removes the error `t` carries along the ray).
-    /// See [`project_onto_plane`] for the error bound.
+    /// See `project_onto_plane` (below) for the error bound.
     pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
         project_onto_plane(ray.at(t), self.normal, self.offset)
     }
