@@ -6,7 +6,9 @@
 //!
 //! - [`raytree`]: every ray one pixel spawned, as JSON, OBJ/PLY line
 //!   segments, or drawn over the rendered image.
-//! - [`draw`]: lines, boxes and scale bars on an RGB image.
+//! - [`grid`]: the uniform grid's occupied cells as boxes (assignment 5).
+//! - [`draw`]: lines, marks and labels on an RGB image.
 
 pub mod draw;
+pub mod grid;
 pub mod raytree;
