@@ -6,9 +6,11 @@
 //!
 //! - [`raytree`]: every ray one pixel spawned, as JSON, OBJ/PLY line
 //!   segments, or drawn over the rendered image.
+//! - [`traversal`]: the cells, leaves or BVH boxes one ray's search looked at.
 //! - [`grid`]: the uniform grid's occupied cells as boxes (assignment 5).
 //! - [`draw`]: lines, marks and labels on an RGB image.
 
 pub mod draw;
 pub mod grid;
 pub mod raytree;
+pub mod traversal;

@@ -22,6 +22,7 @@ struct Cli {
 
 mod bench;
 mod raytree;
+mod traverse;
 
 #[derive(Subcommand)]
 enum Command {
@@ -54,6 +55,8 @@ enum Command {
     Render(RenderArgs),
     /// Record every ray one pixel spawns: .json tree, .obj/.ply segments, or drawn over the image.
     Raytree(raytree::RaytreeArgs),
+    /// Show the grid cells, octree leaves or BVH boxes an accelerator looks at for some pixels' eye rays.
+    Traverse(traverse::TraverseArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -145,6 +148,7 @@ fn real_main() -> ExitCode {
         Command::Render(a) => render(a),
         Command::Info { scene } => info(scene),
         Command::Raytree(a) => raytree::run(a),
+        Command::Traverse(a) => traverse::run(a),
         Command::Bench {
             scenes,
             course,
