@@ -146,6 +146,8 @@ pub struct Report {
     pub render: Duration,
     /// Number of primitives in the world.
     pub primitives: usize,
+    /// Bounds of the world's bounded primitives (planes excluded).
+    pub bounds: crate::math::Aabb,
     /// The rendered planes.
     pub frame: Frame,
 }
@@ -284,6 +286,7 @@ impl Job {
             world_ms,
             render: render_time,
             primitives: world.prims.len(),
+            bounds: world.bounds(),
             frame,
         };
         if let Some(path) = &self.stats_json {
@@ -481,6 +484,76 @@ pub fn run_guarded(
         Ok(code) => code,
         Err(_) => std::process::ExitCode::from(1),
     }
+}
+
+/// The course's statistics report (`raytracing_stats.C`, NOTES.md A6), for
+/// `raytracer -stats`: time, pixels, scene bounds, grid cells, rays by kind,
+/// intersections, cells traversed and the per-ray figures, which count
+/// non-shadow plus shadow rays. `glint --stats` and `--stats-json` keep the
+/// full counters.
+pub fn course_stats_text(report: &Report) -> String {
+    // The grid's resolution, from its description (`grid 10x10x7`).
+    let grid: Option<[u32; 3]> = report.accel.strip_prefix("grid ").and_then(|r| {
+        let v: Vec<u32> = r.split('x').filter_map(|n| n.trim().parse().ok()).collect();
+        <[u32; 3]>::try_from(v).ok()
+    });
+    let bounds = Some(report.bounds);
+    let st = report.stats();
+    let secs = report.render.as_secs_f64();
+    let whole = secs as u64;
+    let pixels = u64::from(st.width) * u64::from(st.height);
+    let rays = st.rays_total.max(1) as f64;
+    let non_shadow = st.rays_total - st.rays_shadow;
+    let mut s =
+        String::from("********************************************\nRAY TRACING STATISTICS\n");
+    let mut line = |k: &str, v: String| s.push_str(&format!("  {k:<27}{v}\n"));
+    line(
+        "total time",
+        format!("{}:{:02}:{:02}", whole / 3600, whole / 60 % 60, whole % 60),
+    );
+    line(
+        "num pixels",
+        format!("{pixels} ({}x{})", st.width, st.height),
+    );
+    line(
+        "scene bounds",
+        match bounds.filter(|b| !b.is_empty()) {
+            Some(b) => format!(
+                "({:.4}, {:.4}, {:.4}) -> ({:.4}, {:.4}, {:.4})",
+                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line(
+        "num grid cells",
+        match grid {
+            Some([x, y, z]) => format!(
+                "{} ({x}x{y}x{z})",
+                u64::from(x) * u64::from(y) * u64::from(z)
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line("num non-shadow rays", non_shadow.to_string());
+    line("num shadow rays", st.rays_shadow.to_string());
+    line("total intersections", st.intersection_tests.to_string());
+    line("total cells traversed", st.nodes_visited.to_string());
+    line("rays per second", format!("{:.1}", rays / secs.max(1e-9)));
+    line(
+        "rays per pixel",
+        format!("{:.3}", rays / pixels.max(1) as f64),
+    );
+    line(
+        "intersections per ray",
+        format!("{:.3}", st.intersection_tests as f64 / rays),
+    );
+    line(
+        "cells traversed per ray",
+        format!("{:.3}", st.nodes_visited as f64 / rays),
+    );
+    s.push_str("********************************************\n");
+    s
 }
 
 #[cfg(test)]

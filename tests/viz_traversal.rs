@@ -242,3 +242,39 @@ fn traverse_command_writes_every_kind_of_output() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("b.json")).unwrap()).unwrap();
     assert_eq!(json["rays"].as_array().unwrap().len(), 2);
 }
+
+#[test]
+fn structure_command_and_course_stats_report() {
+    let dir = scratch("structure");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .arg("structure")
+        .arg(own_scene("mesh_knot_1k.txt"))
+        .args([
+            "--accel", "bvh", "--depth", "2", "--size", "48", "36", "-o", "s.png",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("drew 4 boxes"));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .arg("-input")
+        .arg(own_scene("mesh_knot_1k.txt"))
+        .args([
+            "-size", "20", "10", "-output", "k.png", "-grid", "6", "5", "4", "-stats",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success());
+    for want in [
+        "RAY TRACING STATISTICS",
+        "num pixels                 200 (20x10)",
+        "num grid cells             120 (6x5x4)",
+        "num non-shadow rays        200",
+        "cells traversed per ray",
+    ] {
+        assert!(text.contains(want), "{want:?} missing from\n{text}");
+    }
+}

@@ -66,7 +66,11 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "world|object",
         "where textures are looked up (default world)",
     ),
-    ("-stats", "", "print ray and traversal statistics"),
+    (
+        "-stats",
+        "",
+        "print the course's statistics report (time, rays, intersections, cells)",
+    ),
     ("-stats_json", "FILE", "write the statistics as JSON"),
     ("-threads", "N", "worker threads (default: all cores)"),
     ("-quiet", "", "no progress bar"),
@@ -124,7 +128,7 @@ fn real_main() -> ExitCode {
     match job.run() {
         Ok(report) => {
             if stats {
-                print!("{}", report.stats_text());
+                print!("{}", glint::job::course_stats_text(&report));
             }
             ExitCode::SUCCESS
         }

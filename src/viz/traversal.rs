@@ -147,7 +147,7 @@ fn visit_color(v: &Visit, last: bool, hit: bool, bvh: bool) -> Vec3 {
 }
 
 /// The 12 edges of a box.
-fn box_edges(b: &Aabb) -> Vec<(Vec3, Vec3)> {
+pub(crate) fn box_edges(b: &Aabb) -> Vec<(Vec3, Vec3)> {
     let corner = |i: usize| {
         Vec3::new(
             if i & 1 == 0 { b.min.x } else { b.max.x },

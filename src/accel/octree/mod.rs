@@ -191,6 +191,29 @@ impl Octree {
     pub fn depth(&self) -> u32 {
         self.depth
     }
+
+    /// Every node's box, depth (the root is 0) and whether it is a leaf,
+    /// parents before children: for drawing the structure.
+    pub fn node_boxes(&self) -> Vec<(Aabb, u32, bool)> {
+        let mut out = Vec::new();
+        if self.nodes.is_empty() {
+            return out;
+        }
+        let mut stack = vec![(0usize, self.root, 0u32)];
+        while let Some((k, b, d)) = stack.pop() {
+            match self.nodes[k] {
+                Node::Leaf { .. } => out.push((b, d, true)),
+                Node::Inner { first, axes } => {
+                    out.push((b, d, false));
+                    for c in child_codes(axes) {
+                        let child = first as usize + slot(c, axes);
+                        stack.push((child, child_box(&b, c, axes), d + 1));
+                    }
+                }
+            }
+        }
+        out
+    }
 }
 
 impl Aggregate for Octree {

@@ -22,6 +22,7 @@ struct Cli {
 
 mod bench;
 mod raytree;
+mod structure;
 mod traverse;
 
 #[derive(Subcommand)]
@@ -57,6 +58,8 @@ enum Command {
     Raytree(raytree::RaytreeArgs),
     /// Show the grid cells, octree leaves or BVH boxes an accelerator looks at for some pixels' eye rays.
     Traverse(traverse::TraverseArgs),
+    /// Draw a BVH's or an octree's boxes at one depth (or its leaves) over the rendered image.
+    Structure(structure::StructureArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -149,6 +152,7 @@ fn real_main() -> ExitCode {
         Command::Info { scene } => info(scene),
         Command::Raytree(a) => raytree::run(a),
         Command::Traverse(a) => traverse::run(a),
+        Command::Structure(a) => structure::run(a),
         Command::Bench {
             scenes,
             course,
