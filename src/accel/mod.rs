@@ -42,8 +42,8 @@ pub use kind::{AccelKind, ParseAccelError, Split};
 pub use octree::Octree;
 
 use crate::math::{Aabb, Ray};
-use crate::stats::Counters;
 use crate::primitive::Primitive;
+use crate::stats::Counters;
 
 /// The closest hit an aggregate found: parameter and primitive index.
 #[derive(Clone, Copy, Debug, PartialEq)]
