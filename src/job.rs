@@ -3,7 +3,7 @@
 
 use crate::format::{load_scene, ParseError};
 use crate::integrator::Whitted;
-use crate::output::{write_rgb, OutputError};
+use crate::output::{check_path, write_rgb, OutputError};
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
     render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, Settings,
@@ -126,7 +126,11 @@ impl JobError {
     /// The process exit status for this error: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
-            JobError::Parse(_) | JobError::Usage(_) => 2,
+            // A request that names no writable image is the user's to fix;
+            // checked before any work.
+            JobError::Parse(_)
+            | JobError::Usage(_)
+            | JobError::Output(OutputError::Format { .. } | OutputError::NoDir { .. }) => 2,
             JobError::Output(_) | JobError::Internal(_) => 1,
             JobError::Interrupted(_) => 130,
         }
@@ -159,6 +163,19 @@ pub struct Report {
 }
 
 impl Job {
+    /// Every image file this job will write (colour, depth, normals).
+    pub fn image_paths(&self) -> impl Iterator<Item = &Path> {
+        let depth = self.depth.as_ref().map(|(_, _, p)| p.as_path());
+        self.output
+            .as_deref()
+            .into_iter()
+            .chain(depth)
+            .chain(self.normals.as_deref())
+            .chain(self.samples_view.as_ref().map(|(p, _)| p.as_path()))
+            .chain(self.filter_view.as_ref().map(|(p, _)| p.as_path()))
+            .chain(self.samples_image.as_deref())
+    }
+
     /// A job with the course's defaults (no outputs yet).
     pub fn new(input: PathBuf, width: u32, height: u32) -> Self {
         Self {
@@ -206,6 +223,9 @@ impl Job {
             )));
         }
         check_frame_memory(self.width, self.height, available_memory())?;
+        for path in self.image_paths() {
+            check_path(path)?;
+        }
         let t_load = Instant::now();
         let scene = load_scene(&self.input)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;

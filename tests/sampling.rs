@@ -5,9 +5,6 @@
 
 mod common;
 
-#[path = "../src/testdata.rs"]
-mod testdata;
-
 use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::math::Vec3;
@@ -71,7 +68,7 @@ fn sampled(size: (u32, u32), kind: SamplerKind, spp: u32, filter: Filter) -> Set
 /// size that is not a multiple of the tile.
 #[test]
 fn one_sample_per_pixel_equals_the_old_loop() {
-    let Some(dir) = testdata::scenes("one_sample_per_pixel_equals_the_old_loop") else {
+    let Some(dir) = common::scenes("one_sample_per_pixel_equals_the_old_loop") else {
         return;
     };
     for name in [
@@ -104,7 +101,7 @@ fn one_sample_per_pixel_equals_the_old_loop() {
 /// a filter wider than a pixel (tile margins), and for adaptive sampling.
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
-    let Some(dir) = testdata::scenes("images_do_not_depend_on_the_thread_count") else {
+    let Some(dir) = common::scenes("images_do_not_depend_on_the_thread_count") else {
         return;
     };
     let scene = load_scene(&dir.join("scene4_14_faceted_gem.txt")).unwrap();
@@ -154,10 +151,11 @@ fn images_do_not_depend_on_the_thread_count() {
 /// same float image (PFM keeps the bits).
 #[test]
 fn cli_threads_1_and_2_write_the_same_file() {
-    let Some(dir) = testdata::scenes("cli_threads_1_and_2_write_the_same_file") else {
+    let Some(dir) = common::scenes("cli_threads_1_and_2_write_the_same_file") else {
         return;
     };
-    let out = common::scratch("threads");
+    let scratch = common::scratch("threads");
+    let out = scratch.as_ref();
     let scene = dir.join("scene7_01_sphere_triangle.txt");
     let run = |threads: &str, file: &str| {
         let st = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
@@ -179,14 +177,13 @@ fn cli_threads_1_and_2_write_the_same_file() {
                 "tent:1.5",
             ])
             .args(["--threads", threads, "--quiet"])
-            .current_dir(&out)
+            .current_dir(out)
             .status()
             .unwrap();
         assert!(st.success());
         std::fs::read(out.join(file)).unwrap()
     };
     assert!(run("1", "one.pfm") == run("2", "two.pfm"));
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 /// scene7_01 (a sphere and a triangle in flat colours on blue: hard edges
@@ -194,7 +191,7 @@ fn cli_threads_1_and_2_write_the_same_file() {
 /// grows, and at 16 spp jittered and Sobol beat random.
 #[test]
 fn error_falls_with_samples_and_stratification_helps() {
-    let Some(dir) = testdata::scenes("error_falls_with_samples_and_stratification_helps") else {
+    let Some(dir) = common::scenes("error_falls_with_samples_and_stratification_helps") else {
         return;
     };
     let scene = load_scene(&dir.join("scene7_01_sphere_triangle.txt")).unwrap();
@@ -241,7 +238,7 @@ fn error_falls_with_samples_and_stratification_helps() {
 /// background only) traces exactly the pixel corners.
 #[test]
 fn adaptive_traces_only_the_corners_of_a_flat_image() {
-    let Some(dir) = testdata::scenes("adaptive_traces_only_the_corners_of_a_flat_image") else {
+    let Some(dir) = common::scenes("adaptive_traces_only_the_corners_of_a_flat_image") else {
         return;
     };
     let mut scene = load_scene(&dir.join("scene7_01_sphere_triangle.txt")).unwrap();
@@ -265,7 +262,7 @@ fn adaptive_traces_only_the_corners_of_a_flat_image() {
 /// 16 spp (4×4 cell centres) with fewer camera rays.
 #[test]
 fn adaptive_matches_uniform_16_with_fewer_rays() {
-    let Some(dir) = testdata::scenes("adaptive_matches_uniform_16_with_fewer_rays") else {
+    let Some(dir) = common::scenes("adaptive_matches_uniform_16_with_fewer_rays") else {
         return;
     };
     let scene = load_scene(&dir.join("scene7_01_sphere_triangle.txt")).unwrap();
@@ -309,10 +306,11 @@ fn adaptive_matches_uniform_16_with_fewer_rays() {
 /// The sample and filter views and the heat map through `glint render`.
 #[test]
 fn glint_writes_the_views_and_sampling_stats() {
-    let Some(dir) = testdata::scenes("glint_writes_the_views_and_sampling_stats") else {
+    let Some(dir) = common::scenes("glint_writes_the_views_and_sampling_stats") else {
         return;
     };
-    let out = common::scratch("views");
+    let scratch = common::scratch("views");
+    let out = scratch.as_ref();
     let scene = dir.join("scene7_01_sphere_triangle.txt");
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
         .args([
@@ -341,7 +339,7 @@ fn glint_writes_the_views_and_sampling_stats() {
             "10",
         ])
         .args(["--stats-json", "st.json", "--quiet"])
-        .current_dir(&out)
+        .current_dir(out)
         .status()
         .unwrap();
     assert!(st.success());
@@ -373,7 +371,7 @@ fn glint_writes_the_views_and_sampling_stats() {
             "heat.png",
         ])
         .args(["--quiet", "--stats"])
-        .current_dir(&out)
+        .current_dir(out)
         .output()
         .unwrap();
     assert!(st.status.success());
@@ -383,5 +381,4 @@ fn glint_writes_the_views_and_sampling_stats() {
     let (hw, hh) = dims("heat.png");
     assert!(hw >= 256 && hh > hw, "{hw}x{hh}: map plus scale bar");
     assert!(Path::new(&out.join("a.png")).exists());
-    let _ = std::fs::remove_dir_all(&out);
 }

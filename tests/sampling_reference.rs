@@ -34,9 +34,6 @@
 mod common;
 use common::*;
 
-#[path = "../src/testdata.rs"]
-mod testdata;
-
 /// Deterministic images: (name, max mean abs, max fraction off, why).
 const DETERMINISTIC: &[(&str, f64, f64, &str)] = &[
     ("filter7_01a.tga", 0.05, 0.0, "exact (measured 0)"),
@@ -149,8 +146,8 @@ const DETERMINISTIC: &[(&str, f64, f64, &str)] = &[
 
 /// Runs every line of A7_cmd.txt once into `dir`; panics naming the lines
 /// that fail.
-fn run_all(dir: &std::path::Path) -> Vec<CmdLine> {
-    let lines = command_lines("A7_cmd.txt");
+fn run_all(data: &CourseData, dir: &std::path::Path) -> Vec<CmdLine> {
+    let lines = command_lines(&data.scenes, "A7_cmd.txt");
     assert!(
         lines.len() >= 60,
         "A7_cmd.txt has {} image lines",
@@ -159,7 +156,7 @@ fn run_all(dir: &std::path::Path) -> Vec<CmdLine> {
     let failures: Vec<String> = lines
         .iter()
         .filter_map(|l| {
-            run_raytracer(&l.args, dir)
+            run_raytracer(&data.scenes, &l.args, dir)
                 .err()
                 .map(|e| format!("{}: {e}", l.text))
         })
@@ -268,11 +265,12 @@ const SHARPNESS: f64 = 0.14;
 
 #[test]
 fn assignment7_every_line_runs_and_matches() {
-    let Some(_) = testdata::scenes("assignment7_every_line_runs_and_matches") else {
+    let Some(data) = course_data("assignment7_every_line_runs_and_matches") else {
         return;
     };
-    let dir = scratch("A7-sampling");
-    let lines = run_all(&dir);
+    let scratch = scratch("A7-sampling");
+    let dir = scratch.as_ref();
+    let lines = run_all(&data, dir);
     let mut failures = Vec::new();
 
     // Every image named on a line was written.
@@ -285,7 +283,7 @@ fn assignment7_every_line_runs_and_matches() {
     }
 
     for &(name, max_mean, max_off, why) in DETERMINISTIC {
-        match diff(&dir.join(name), &reference_for(name)) {
+        match diff(&dir.join(name), &reference_for(&data.refs, name)) {
             Ok(d) if d.mean_abs <= max_mean && d.frac_off <= max_off => {}
             Ok(d) => failures.push(format!(
                 "{name}: mean abs {:.3} (max {max_mean}), {:.2}% off (max {:.1}%) [{why}]",
@@ -301,8 +299,8 @@ fn assignment7_every_line_runs_and_matches() {
     for &(name, base, mean) in STOCHASTIC {
         let (w, h, ours) = load(dir.join(name));
         let (_, _, ours1) = load(dir.join(base));
-        let (rw, rh, refs) = load(reference_for(name));
-        let (_, _, refs1) = load(reference_for(base));
+        let (rw, rh, refs) = load(reference_for(&data.refs, name));
+        let (_, _, refs1) = load(reference_for(&data.refs, base));
         assert_eq!((w, h), (rw, rh), "{name}");
         let (mo, mr) = (mean_rgb(&ours), mean_rgb(&refs));
         match mean {
@@ -347,7 +345,7 @@ fn assignment7_every_line_runs_and_matches() {
         }
         let name = &l.outputs[0];
         let (w, h, ours) = load(dir.join(name));
-        let (_, _, refs) = load(reference_for(name));
+        let (_, _, refs) = load(reference_for(&data.refs, name));
         let (mo, mr) = (mean_rgb(&ours), mean_rgb(&refs));
         if (0..3).any(|c| (mo[c] - mr[c]).abs() > 1.0) {
             failures.push(format!("{name}: mean {mo:.2?} vs reference {mr:.2?}"));
@@ -371,6 +369,5 @@ fn assignment7_every_line_runs_and_matches() {
         }
     }
 
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
