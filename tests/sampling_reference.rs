@@ -176,13 +176,12 @@ fn sharpness(w: u32, h: u32, px: &[[u8; 3]]) -> f64 {
     let mut sum = 0.0;
     for y in 0..h {
         for x in 0..w {
-            for c in 0..3 {
-                let v = px[y * w + x][c] as f64;
-                if x + 1 < w {
-                    sum += (px[y * w + x + 1][c] as f64 - v).abs();
-                }
-                if y + 1 < h {
-                    sum += (px[(y + 1) * w + x][c] as f64 - v).abs();
+            let here = px[y * w + x];
+            let right = (x + 1 < w).then(|| px[y * w + x + 1]);
+            let below = (y + 1 < h).then(|| px[(y + 1) * w + x]);
+            for (c, &v) in here.iter().enumerate() {
+                for n in right.iter().chain(below.iter()) {
+                    sum += (n[c] as f64 - v as f64).abs();
                 }
             }
         }
