@@ -193,14 +193,7 @@ impl Whitted {
         if !self.transparent_shadows {
             let (shadow, tmax) = target.ray_from(&from);
             let blocked = world.occluded(&shadow, 0.0, tmax, c);
-            obs.ray(
-                RayKind::Shadow,
-                &shadow,
-                if blocked { f32::NAN } else { tmax },
-                depth,
-                0.0,
-                None,
-            );
+            obs.shadow(&shadow, tmax, blocked, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut filter = Vec3::ONE;

@@ -46,6 +46,14 @@ impl World {
         World::build_at(scene, opts, camera_center(&scene.camera).as_dvec3())
     }
 
+    /// [`World::build`] without the move into rendering space: everything
+    /// stays in world coordinates. For tools whose output must line up with
+    /// the scene file (visualisations exporting geometry, `glint info`'s
+    /// bounds), where f32 precision far from the camera does not matter.
+    pub fn build_world_space(scene: &Scene, opts: BuildOptions) -> World {
+        World::build_at(scene, opts, DVec3::ZERO)
+    }
+
     /// [`World::build`] with the rendering-space origin at the world-space
     /// point `origin` (`DVec3::ZERO`: render in world space, as glint did
     /// before rendering space; kept to measure what it brings).
