@@ -5,10 +5,11 @@ use crate::accel::AccelKind;
 use crate::format::{load_scene, ParseError};
 use crate::integrator::Whitted;
 use crate::output::{check_path, write_rgb, OutputError};
+use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, Settings,
-    TILE_SIZE,
+    render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
+    Sampler, Settings, TILE_SIZE,
 };
 use crate::scene::Scene;
 use crate::stats::Counters;
@@ -60,6 +61,9 @@ pub struct Job {
     /// Heat maps of intersection tests and nodes visited per pixel, with
     /// scale bars and totals (`--cost-image`).
     pub cost_image: Option<PathBuf>,
+    /// Render only this piece of the frame and write it as an EXR with a
+    /// data window (`--tile I/N`, `--crop`); see [`crate::piece`].
+    pub piece: Option<PieceSpec>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -189,6 +193,50 @@ impl Job {
             .chain(self.cost_image.as_deref())
     }
 
+    /// A piece renders one image, an EXR: nothing else this job could write
+    /// would be a piece of anything.
+    fn check_piece(&self, p: &PieceSpec) -> Result<(), JobError> {
+        let exr = self
+            .output
+            .as_ref()
+            .is_some_and(|o| o.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")));
+        if !exr {
+            return Err(JobError::Usage(format!(
+                "{}: a piece of a frame is written as OpenEXR: give an output ending in .exr",
+                p.label
+            )));
+        }
+        if self.image_paths().count() > 1 {
+            return Err(JobError::Usage(format!(
+                "{}: only the colour image can be rendered in pieces (no depth, normals, views or cost images)",
+                p.label
+            )));
+        }
+        if self.adaptive.is_some() {
+            return Err(JobError::Usage(format!(
+                "{}: adaptive sampling shares corner rays between tiles, so it cannot be split into pieces",
+                p.label
+            )));
+        }
+        if p.rect.x1 > self.width || p.rect.row1 > self.height {
+            return Err(JobError::Usage(format!(
+                "{} lies outside the {}x{} frame",
+                p.label, self.width, self.height
+            )));
+        }
+        Ok(())
+    }
+
+    /// The hash of everything that decides the image (not the accelerator,
+    /// the thread count or the outputs, which do not).
+    fn piece_hash(&self, scene: &Scene, settings: &Settings) -> String {
+        let parts = format!(
+            "{settings:?}|{:?}|flatten {}|texture {:?}",
+            self.integrator, self.build.flatten, self.integrator.texture_space
+        );
+        crate::piece::settings_hash(scene, &parts)
+    }
+
     /// A job with the course's defaults (no outputs yet).
     pub fn new(input: PathBuf, width: u32, height: u32) -> Self {
         Self {
@@ -209,6 +257,7 @@ impl Job {
             filter_view: None,
             samples_image: None,
             cost_image: None,
+            piece: None,
             cancel: None,
             progress: false,
             stats_json: None,
@@ -240,6 +289,9 @@ impl Job {
         check_frame_memory(self.width, self.height, available_memory())?;
         for path in self.image_paths() {
             check_path(path)?;
+        }
+        if let Some(p) = &self.piece {
+            self.check_piece(p)?;
         }
         if self.cost_image.is_some() && self.adaptive.is_some() {
             return Err(JobError::Usage(
@@ -287,8 +339,17 @@ impl Job {
         };
         let settings = self.settings();
         let start = Instant::now();
-        let rendered =
-            pool.install(|| render_image(&world, &camera, &self.integrator, &settings, control));
+        let rendered = pool.install(|| match &self.piece {
+            Some(p) => render_region(
+                &world,
+                &camera,
+                &self.integrator,
+                &settings,
+                control,
+                p.rect,
+            ),
+            None => render_image(&world, &camera, &self.integrator, &settings, control),
+        });
         let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();
         if let Some(b) = bar {
@@ -301,9 +362,31 @@ impl Job {
             legend(&mut canvas, v.max_count());
             frame.color = canvas.pixels;
         }
-        let complete = frame.is_complete();
+        let complete = match &self.piece {
+            Some(p) => (p.rect.row0..p.rect.row1).all(|r| frame.complete[r as usize]),
+            None => frame.is_complete(),
+        };
         let (w, h) = (self.width, self.height);
         let mut written = Vec::new();
+        if let (Some(out), Some(p)) = (&self.output, &self.piece) {
+            let out = if complete {
+                out.clone()
+            } else {
+                partial_path(out)
+            };
+            let hash = self.piece_hash(&scene, &settings);
+            let stats = serde_json::json!({
+                "rays_primary": counters.primary,
+                "rays_shadow": counters.shadow,
+                "rays_reflected": counters.reflected,
+                "rays_refracted": counters.refracted,
+                "intersection_tests": counters.intersection_tests,
+                "nodes_visited": counters.nodes_visited,
+                "render_ms": render_time.as_secs_f64() * 1e3,
+            });
+            crate::piece::write(&out, &frame, p, &hash, &stats)?;
+            written.push(out);
+        }
         let mut write_sized = |out: &PathBuf,
                                (w, h): (u32, u32),
                                pixels: &[crate::math::Vec3]|
@@ -319,8 +402,10 @@ impl Job {
         };
         let mut write =
             |out: &PathBuf, pixels: &[crate::math::Vec3]| write_sized(out, (w, h), pixels);
-        if let Some(out) = &self.output {
-            write(out, &frame.color)?;
+        if self.piece.is_none() {
+            if let Some(out) = &self.output {
+                write(out, &frame.color)?;
+            }
         }
         if let Some((t0, t1, out)) = &self.depth {
             write(out, &frame.depth_image(*t0, *t1))?;

@@ -7,6 +7,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod output;
+pub mod piece;
 pub mod primitive;
 pub mod render;
 pub mod scene;
