@@ -66,15 +66,25 @@ pub fn index_from_env(
     parse_index(&format!("{}/{n}", value.trim())).map_err(|e| format!("{var}={value}: {e}"))
 }
 
-/// Band `i` of `n` of a `w`×`h` frame: whole rows, as even as integers
-/// allow (rows `⌊i·h/n⌋` to `⌊(i+1)·h/n⌋`).
-pub fn band(i: u32, n: u32, (w, h): (u32, u32)) -> Result<PieceSpec, String> {
+/// Band `i` of `n` of a `w`×`h` frame rendered in tiles of `tile` pixels:
+/// whole rows of tiles when there are at least `n` of them (a piece then
+/// renders no tile another piece renders, except for the filter's margin),
+/// else whole pixel rows; as even as integers allow.
+pub fn band(i: u32, n: u32, (w, h): (u32, u32), tile: u32) -> Result<PieceSpec, String> {
     if n > h {
         return Err(format!(
             "{n} pieces of a frame {h} rows high: at most one piece per row"
         ));
     }
-    let row = |k: u32| (u64::from(k) * u64::from(h) / u64::from(n)) as u32;
+    let tile = tile.max(1);
+    let tile_rows = h.div_ceil(tile);
+    let row = |k: u32| {
+        if n <= tile_rows {
+            ((u64::from(k) * u64::from(tile_rows) / u64::from(n)) as u32 * tile).min(h)
+        } else {
+            (u64::from(k) * u64::from(h) / u64::from(n)) as u32
+        }
+    };
     Ok(PieceSpec {
         rect: Rect {
             x0: 0,
@@ -334,14 +344,19 @@ mod tests {
         for (n, h) in [(1, 10), (4, 10), (7, 10), (10, 10), (3, 1000)] {
             let mut next = 0;
             for i in 0..n {
-                let b = band(i, n, (5, h)).unwrap().rect;
+                let b = band(i, n, (5, h), 32).unwrap().rect;
                 assert_eq!(b.row0, next);
                 assert!(b.row1 > b.row0);
                 next = b.row1;
             }
             assert_eq!(next, h);
         }
-        assert!(band(0, 11, (5, 10)).is_err());
+        assert!(band(0, 11, (5, 10), 32).is_err());
+        // Along tile rows when there are enough of them.
+        let rows: Vec<u32> = (0..3)
+            .map(|i| band(i, 3, (5, 100), 32).unwrap().rect.row0)
+            .collect();
+        assert_eq!(rows, [0, 32, 64]);
     }
 
     #[test]

@@ -103,6 +103,7 @@ fn one_four_and_seven_pieces_merge_bit_for_bit() {
     // A crop's pixels equal the whole render's in that rectangle.
     let scene = own_scene("whitted.txt").to_string_lossy().into_owned();
     let base = [&["render", scene.as_str()][..], &wide[..]].concat();
+    ok(&glint(&[&base[..], &["-o", "single.exr"]].concat(), &dir));
     ok(&glint(
         &[&base[..], &["-o", "c.exr", "--crop", "10", "5", "33", "29"]].concat(),
         &dir,
@@ -130,7 +131,9 @@ fn one_four_and_seven_pieces_merge_bit_for_bit() {
 fn wrong_sets_of_pieces_are_refused_and_nothing_is_written() {
     let dir = scratch("pieces-bad");
     let scene = own_scene("whitted.txt").to_string_lossy().into_owned();
-    let flags = ["--size", "40", "30", "--spp", "2", "--quiet"];
+    // 100 rows: four rows of 32-pixel render tiles, so three pieces split
+    // along tile rows and render no pixel twice (box filter, no margin).
+    let flags = ["--size", "40", "100", "--spp", "2", "--quiet"];
     for i in 0..3 {
         let (name, tile) = (format!("p{i}.exr"), format!("{i}/3"));
         ok(&glint(
@@ -202,12 +205,12 @@ fn wrong_sets_of_pieces_are_refused_and_nothing_is_written() {
     let stats: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
     assert_eq!(stats["pieces"], 3);
-    assert_eq!(stats["rays_primary"], 40 * 30 * 2);
+    assert_eq!(stats["rays_primary"], 40 * 100 * 2);
     // Bad piece requests exit 2 before any work.
     for bad in [
         &["--tile", "3/3"][..],
-        &["--tile", "1/31"][..],
-        &["--crop", "0", "0", "41", "30"][..],
+        &["--tile", "1/101"][..],
+        &["--crop", "0", "0", "41", "100"][..],
         &["--tile-from-env", "NO_SUCH_VAR_GLINT/3"][..],
     ] {
         let out = glint(

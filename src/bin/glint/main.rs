@@ -271,12 +271,13 @@ fn render(a: RenderArgs) -> ExitCode {
     job.cost_image = a.cost_image;
     let size = (job.width, job.height);
     let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
-        (Some(t), _, _) => {
-            Some(glint::piece::parse_index(t).and_then(|(i, n)| glint::piece::band(i, n, size)))
-        }
+        (Some(t), _, _) => Some(
+            glint::piece::parse_index(t)
+                .and_then(|(i, n)| glint::piece::band(i, n, size, glint::render::TILE_SIZE)),
+        ),
         (_, Some(t), _) => Some(
             glint::piece::index_from_env(t, |v| std::env::var(v).ok())
-                .and_then(|(i, n)| glint::piece::band(i, n, size)),
+                .and_then(|(i, n)| glint::piece::band(i, n, size, glint::render::TILE_SIZE)),
         ),
         (_, _, Some(c)) => Some(glint::piece::crop([c[0], c[1], c[2], c[3]], size)),
         _ => None,
