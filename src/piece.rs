@@ -215,10 +215,14 @@ pub fn read(path: &Path) -> Result<PieceFile, String> {
     })
 }
 
+/// A merged frame: its size, its pixels (row-major, top row first) and the
+/// pieces' statistics added up.
+pub type Merged = ((u32, u32), Vec<Vec3>, serde_json::Value);
+
 /// Assembles `pieces` into the whole frame: they must come from the same
 /// render (same hash and frame size) and cover every pixel exactly once. On
 /// success returns the frame size, its pixels and the summed statistics.
-pub fn merge(pieces: &[PieceFile]) -> Result<((u32, u32), Vec<Vec3>, serde_json::Value), String> {
+pub fn merge(pieces: &[PieceFile]) -> Result<Merged, String> {
     let first = pieces.first().ok_or("no pieces to merge")?;
     let name = |p: &PieceFile| format!("{} ({})", p.path.display(), p.label);
     let strangers: Vec<String> = pieces

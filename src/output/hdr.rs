@@ -31,8 +31,10 @@ pub(super) fn write_exr_window(
     attrs: &[(&str, String)],
 ) -> Result<(), String> {
     use exr::prelude::*;
-    let mut la = LayerAttributes::default();
-    la.layer_position = Vec2(x0 as i32, y0 as i32);
+    let mut la = LayerAttributes {
+        layer_position: Vec2(x0 as i32, y0 as i32),
+        ..LayerAttributes::default()
+    };
     for (k, v) in attrs {
         la.other.insert(
             Text::from(*k),
