@@ -183,7 +183,7 @@ pub struct PieceFile {
     pub pixels: Vec<Vec3>,
 }
 
-/// Reads a piece written by [`write`].
+/// Reads a piece written by [`write()`].
 pub fn read(path: &Path) -> Result<PieceFile, String> {
     let w = crate::output::read_exr_window(path)?;
     let attr = |name: &str| {

@@ -57,7 +57,7 @@ pub(super) fn write_exr_window(
     image.write().to_file(path).map_err(|e| e.to_string())
 }
 
-/// What [`read_exr_window`] finds in a windowed EXR.
+/// What [`crate::output::read_exr_window`] finds in a windowed EXR.
 #[derive(Clone, Debug)]
 pub struct ExrWindow {
     /// The display window's size (the whole frame).
