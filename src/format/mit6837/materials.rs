@@ -4,6 +4,7 @@
 use super::cursor::{closing, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
+use crate::limits::MAX_OCTAVES;
 use crate::math::Mat4;
 use crate::scene::{Material, Phong, TextureKind};
 
@@ -185,10 +186,19 @@ impl<'a> Parser<'a> {
         Err(self.error(Some(tok), expected))
     }
 
-    /// A texture's octave count.
+    /// A texture's octave count, 0 to [`MAX_OCTAVES`]: each octave is one
+    /// more noise lookup per shading point, so 2e9 of them hang a render.
     fn octaves(&mut self) -> Result<u32> {
         let (n, tok) = self.non_negative("an octave count")?;
-        u32::try_from(n).map_err(|_| self.error(Some(tok), "an octave count that fits 32 bits"))
+        u32::try_from(n)
+            .ok()
+            .filter(|&n| n <= MAX_OCTAVES)
+            .ok_or_else(|| {
+                self.error(
+                    Some(tok),
+                    format!("an octave count from 0 to {MAX_OCTAVES}"),
+                )
+            })
     }
 
     /// A number satisfying `ok`, else an error at it expecting `what`.

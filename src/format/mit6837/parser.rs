@@ -6,10 +6,15 @@ use super::Result;
 use crate::format::diagnostic::quote;
 use crate::math::Vec3;
 use crate::scene::{Background, Camera, Light, Scene};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Parses a whole scene; `file` is used in messages and to resolve meshes.
 pub(crate) fn parse(src: &str, file: &Path) -> Result<Scene> {
+    parse_with_meshes(src, file).map(|(scene, _)| scene)
+}
+
+/// [`parse`], and the paths of the mesh files the scene read.
+pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<PathBuf>)> {
     let mut p = Parser::new(src, file);
     let mut camera = None;
     let mut lights: Option<Vec<Light>> = None;
@@ -63,13 +68,16 @@ pub(crate) fn parse(src: &str, file: &Path) -> Result<Scene> {
     if lights.is_empty() {
         background.ambient = Vec3::ONE;
     }
-    Ok(Scene {
+    let mut meshes: Vec<PathBuf> = p.meshes.into_keys().collect();
+    meshes.sort();
+    let scene = Scene {
         camera,
         lights,
         background,
         materials: materials.unwrap_or_default(),
         root,
-    })
+    };
+    Ok((scene, meshes))
 }
 
 impl<'a> Parser<'a> {
