@@ -1,6 +1,7 @@
 //! One render as both command lines describe it: load, build, render, write.
 //! The binaries only translate their flags into a [`Job`].
 
+use crate::accel::AccelKind;
 use crate::format::{load_scene_files, ParseError};
 use crate::integrator::Whitted;
 use crate::limits;
@@ -10,6 +11,8 @@ use crate::output::{
 use crate::render::{render_with, CameraModel, Control, Frame, PixelOffset};
 use crate::scene::Scene;
 use crate::stats::Counters;
+use crate::viz::draw::Canvas;
+use crate::viz::grid::{legend, voxelize, GridView};
 use crate::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -47,6 +50,10 @@ pub struct Job {
     pub progress: bool,
     /// Write the statistics as JSON here.
     pub stats_json: Option<PathBuf>,
+    /// Render the uniform grid's occupied cells instead of the scene
+    /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
+    /// the one `build.accel` asks for, if it is a grid.
+    pub visualize_grid: Option<GridView>,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -285,6 +292,7 @@ impl Job {
             cancel: None,
             progress: false,
             stats_json: None,
+            visualize_grid: None,
         }
     }
 
@@ -296,6 +304,20 @@ impl Job {
         // The meshes are known now; nothing has been written yet.
         self.check_clashes(&files)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+        let mut voxels = None;
+        let scene = match self.visualize_grid {
+            Some(view) => {
+                let res = match self.build.accel {
+                    AccelKind::Grid { res } => res,
+                    _ => None,
+                };
+                let v = voxelize(&World::build(&scene, self.build), res);
+                let cells = v.scene(&scene, view);
+                voxels = Some((v, view));
+                cells
+            }
+            None => scene,
+        };
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
@@ -335,6 +357,13 @@ impl Job {
         let render_time = start.elapsed();
         if let Some(b) = bar {
             b.finish_and_clear();
+        }
+        let mut frame = frame;
+        if let Some((v, GridView::Count)) = &voxels {
+            let mut canvas =
+                Canvas::new(frame.width, frame.height, std::mem::take(&mut frame.color));
+            legend(&mut canvas, v.max_count());
+            frame.color = canvas.pixels;
         }
         let complete = frame.is_complete();
         let (w, h) = (self.width, self.height);

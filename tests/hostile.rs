@@ -187,6 +187,35 @@ fn an_output_that_is_a_mesh_of_the_scene_is_refused() {
 }
 
 #[test]
+fn glint_raytree_never_overwrites_its_scene_or_meshes() {
+    let dir = scratch("clash-raytree");
+    let d: &Path = &dir;
+    write(d, "tri.obj", TRIANGLE_OBJ);
+    let text = scene_text(Some("tri.obj"), "");
+    write(d, "scene.json", &text);
+    for out in ["scene.json", "./tri.obj"] {
+        let args = [
+            "raytree",
+            "scene.json",
+            "--pixel",
+            "1",
+            "1",
+            "--size",
+            "4",
+            "4",
+            "-o",
+            out,
+        ];
+        refused(&glint(&args, d), "would overwrite the input file");
+    }
+    assert_eq!(std::fs::read_to_string(d.join("scene.json")).unwrap(), text);
+    assert_eq!(
+        std::fs::read_to_string(d.join("tri.obj")).unwrap(),
+        TRIANGLE_OBJ
+    );
+}
+
+#[test]
 fn two_outputs_on_one_file_are_refused() {
     let dir = scratch("clash-outputs");
     let d: &Path = &dir;

@@ -6,6 +6,7 @@ use glint::job::Job;
 use glint::limits;
 use glint::material::TextureSpace;
 use glint::render::PixelOffset;
+use glint::viz::grid::GridView;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -207,6 +208,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 );
             }
             "-no_flatten" => job.build.flatten = false,
+            "-visualize_grid" => job.visualize_grid = Some(GridView::Occupied),
+            "-visualize_grid_count" => job.visualize_grid = Some(GridView::Count),
             "-texture_space" => {
                 job.integrator.texture_space = match value("world or object")?.as_str() {
                     "world" => TextureSpace::World,

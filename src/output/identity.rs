@@ -51,6 +51,22 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     FileIdentity::of(a).same(&FileIdentity::of(b))
 }
 
+/// Refuses `output` if it is one of `inputs` (however spelled): writing it
+/// would destroy an input.
+pub fn check_not_input(output: &Path, inputs: &[PathBuf]) -> Result<(), super::OutputError> {
+    let out = FileIdentity::of(output);
+    match inputs.iter().find(|i| FileIdentity::of(i).same(&out)) {
+        Some(input) => Err(super::OutputError::Refused {
+            path: output.into(),
+            reason: format!(
+                "would overwrite the input file {}; choose another name",
+                input.display()
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
 #[cfg(unix)]
 fn inode(path: &Path) -> Option<(u64, u64)> {
     use std::os::unix::fs::MetadataExt;

@@ -11,7 +11,7 @@ mod hdr;
 mod identity;
 mod ldr;
 
-pub use identity::{same_file, FileIdentity};
+pub use identity::{check_not_input, same_file, FileIdentity};
 pub use ldr::to_byte;
 
 use crate::math::Vec3;

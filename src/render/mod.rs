@@ -4,7 +4,7 @@
 mod camera;
 mod frame;
 
-pub use camera::{screen_point, CameraModel};
+pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use frame::Frame;
 
 use crate::integrator::{NoObserver, RayKind, Whitted};

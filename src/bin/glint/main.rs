@@ -22,6 +22,7 @@ struct Cli {
 }
 
 mod bench;
+mod raytree;
 
 #[derive(Subcommand)]
 enum Command {
@@ -52,6 +53,8 @@ enum Command {
     /// Render a scene to an image.
     #[command(long_about = RENDER_HELP)]
     Render(RenderArgs),
+    /// Record every ray one pixel spawns: .json tree, .obj/.ply segments, or drawn over the image.
+    Raytree(raytree::RaytreeArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -145,6 +148,7 @@ fn real_main() -> ExitCode {
     match cli.command {
         Command::Render(a) => render(a),
         Command::Info { scene } => info(scene),
+        Command::Raytree(a) => raytree::run(a),
         Command::Bench {
             scenes,
             course,
