@@ -25,6 +25,16 @@ pub const MAX_BOUNCES: u32 = 64;
 /// sum, so more only costs time (2e9 octaves used to hang a render).
 pub const MAX_OCTAVES: u32 = 32;
 
+/// Largest colour component a scene may give (materials' diffuse and
+/// specular colours, lights, background, ambient light). Reflective and
+/// transparent colours are at most 1. With these, and the attenuation gain
+/// below, a pixel stays far below `f32::MAX`: each ray adds at most
+/// `10^12` per light, and its weight never grows down the tree.
+pub const MAX_COLOR: f32 = 1e4;
+
+/// Most a point light's attenuation `1/(a + b·d + c·d²)` may amplify it.
+pub const MAX_ATTENUATION_GAIN: f32 = 1e4;
+
 /// Longest line, in bytes, an OBJ file may have. A face line with this many
 /// bytes already has about 100,000 corners.
 pub const MAX_OBJ_LINE_BYTES: usize = 1 << 20;

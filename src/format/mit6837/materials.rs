@@ -68,10 +68,12 @@ impl<'a> Parser<'a> {
         ];
         self.fields(kw, &names, |p, f| {
             match f.text {
-                "diffuseColor" => m.diffuse = p.vec3()?.0,
-                "specularColor" => m.specular = p.vec3()?.0,
-                "reflectiveColor" => m.reflective = p.vec3()?.0,
-                "transparentColor" => m.transparent = p.vec3()?.0,
+                "diffuseColor" => m.diffuse = p.color()?,
+                "specularColor" => m.specular = p.color()?,
+                // At most 1: a ray's weight never grows down the tree, so
+                // 64 bounces cannot overflow a pixel.
+                "reflectiveColor" => m.reflective = p.vec3_within(1.0, "a reflectivity")?,
+                "transparentColor" => m.transparent = p.vec3_within(1.0, "a transparency")?,
                 // A negative exponent makes the highlight infinite where N·H = 0.
                 "exponent" => m.exponent = p.number_where(|v| v >= 0.0, "an exponent >= 0")?,
                 // Refraction divides by the index.

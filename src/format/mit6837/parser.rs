@@ -196,17 +196,17 @@ impl<'a> Parser<'a> {
         };
         let (mut place, mut color, mut attenuation) = (None, None, None);
         let close = self.fields(kw, names, |p, f| {
-            let v = Some(p.vec3()?);
             match f.text {
-                "color" => color = v,
-                "attenuation" => attenuation = v,
-                _ => place = v,
+                "color" => color = Some(p.color()?),
+                "attenuation" => {
+                    attenuation = Some(p.vec3_within(f32::MAX, "an attenuation coefficient")?)
+                }
+                _ => place = Some(p.vec3()?),
             }
             Ok(())
         })?;
         let (place, place_toks) = self.require(place, close, names[0], kw)?;
-        let color = self.require(color, close, "color", kw)?.0;
-        let attenuation = attenuation.map(|a| a.0);
+        let color = self.require(color, close, "color", kw)?;
         // A directional light without a direction would light nothing.
         if directional && place.as_dvec3().length_squared() == 0.0 {
             return Err(self.error_found(
@@ -232,7 +232,7 @@ impl<'a> Parser<'a> {
     fn background(&mut self, kw: Token<'a>) -> Result<Background> {
         let mut bg = Background::default();
         self.fields(kw, &["color", "ambientLight"], |p, f| {
-            let v = p.vec3()?.0;
+            let v = p.color()?;
             match f.text {
                 "color" => bg.color = v,
                 _ => bg.ambient = v,
