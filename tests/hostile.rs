@@ -615,3 +615,80 @@ fn an_obj_file_without_faces_is_an_error_naming_it() {
         "notes.txt: expected an OBJ mesh with at least one face",
     );
 }
+
+// ---- Conditions: signals and concurrent writers ------------------------------
+// These passed before issue 15 too (the issue's adversarial run found them
+// fine); they are here so the promises in docs/reliability.md stay tested.
+
+/// SIGTERM (no handler: the process ends at once) during a render leaves an
+/// existing image untouched and no temporary file.
+#[test]
+fn sigterm_during_a_render_keeps_the_existing_image() {
+    let dir = scratch("sigterm");
+    let d: &Path = &dir;
+    write(d, "scene.txt", &scene_text(None, ""));
+    let original = b"precious".to_vec();
+    std::fs::write(d.join("out.png"), &original).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args([
+            "-input",
+            "scene.txt",
+            "-output",
+            "out.png",
+            "-size",
+            "3000",
+            "3000",
+        ])
+        .args(["-shadows", "-quiet", "-threads", "1"])
+        .current_dir(d)
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), None, "ended by the signal");
+    assert_eq!(std::fs::read(d.join("out.png")).unwrap(), original);
+    let mut names: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["out.png", "scene.txt"]);
+}
+
+/// Two renders writing one path at the same time: the file is always one
+/// complete image (each writes its own temporary file and renames it).
+#[test]
+fn racing_writers_leave_a_complete_image() {
+    let dir = scratch("race");
+    let d: &Path = &dir;
+    write(d, "scene.txt", &scene_text(None, ""));
+    for _ in 0..3 {
+        let spawn = |size: &str| {
+            Command::new(env!("CARGO_BIN_EXE_raytracer"))
+                .args([
+                    "-input",
+                    "scene.txt",
+                    "-output",
+                    "out.png",
+                    "-size",
+                    size,
+                    size,
+                ])
+                .current_dir(d)
+                .spawn()
+                .unwrap()
+        };
+        let (mut a, mut b) = (spawn("300"), spawn("301"));
+        assert!(a.wait().unwrap().success() && b.wait().unwrap().success());
+        let img = image::open(d.join("out.png")).unwrap();
+        assert!(matches!(img.width(), 300 | 301) && img.width() == img.height());
+    }
+    let count = std::fs::read_dir(d).unwrap().count();
+    assert_eq!(count, 2, "a temporary file was left");
+}
