@@ -44,12 +44,12 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-bounces",
         "N",
-        "maximum reflection/refraction depth (default 0)",
+        "maximum reflection/refraction depth, 0 to 64 (default 0)",
     ),
     (
         "-weight",
         "W",
-        "prune ray-tree branches contributing less than W (default 0)",
+        "prune ray-tree branches contributing less than W >= 0 (default 0)",
     ),
     ("-grid", "NX NY NZ", "use a uniform grid of this resolution"),
     (
@@ -69,7 +69,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     ),
     ("-stats", "", "print ray and traversal statistics"),
     ("-stats_json", "FILE", "write the statistics as JSON"),
-    ("-threads", "N", "worker threads (default: all cores)"),
+    ("-threads", "N", "worker threads, 1 to 1024 (default: all cores)"),
     ("-quiet", "", "no progress bar"),
     (
         "-gui",

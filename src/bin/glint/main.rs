@@ -85,10 +85,10 @@ struct RenderArgs {
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
     size: Vec<u32>,
-    /// Maximum number of reflection/refraction bounces.
+    /// Maximum number of reflection/refraction bounces (0 to 64).
     #[arg(long, default_value_t = 5)]
     bounces: u32,
-    /// Prune ray-tree branches contributing less than this.
+    /// Prune ray-tree branches contributing less than this (finite, >= 0).
     #[arg(long, default_value_t = 0.01)]
     weight: f32,
     /// Cast shadow rays.
@@ -100,7 +100,7 @@ struct RenderArgs {
     /// Light the back sides of surfaces.
     #[arg(long)]
     shade_back: bool,
-    /// Worker threads (default: all cores).
+    /// Worker threads, 1 to 1024 (default: all cores; more than 4 per core are clamped).
     #[arg(long)]
     threads: Option<usize>,
     /// Print statistics.
