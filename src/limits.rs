@@ -20,6 +20,10 @@ pub const THREADS_PER_CORE: usize = 4;
 /// weight cutoff, not this cap, is what keeps glass-in-glass scenes fast.
 pub const MAX_BOUNCES: u32 = 64;
 
+/// Most samples per pixel (`-random_samples N`, `--spp N`, ...): the work
+/// of a render grows with it, and 4096 is beyond any use in the course.
+pub const MAX_SAMPLES: u32 = 4096;
+
 /// Most noise octaves a texture may ask for. Octave `i` samples at frequency
 /// `2^i`; past about 30 octaves the terms are below `f64` resolution of the
 /// sum, so more only costs time (2e9 octaves used to hang a render).

@@ -692,3 +692,39 @@ fn racing_writers_leave_a_complete_image() {
     let count = std::fs::read_dir(d).unwrap().count();
     assert_eq!(count, 2, "a temporary file was left");
 }
+
+/// The sampling flags (merged after issue 15 was filed) follow the same rule:
+/// a count, zoom or threshold outside its range is refused before any work.
+#[test]
+fn sampling_extremes_are_refused_up_front() {
+    let dir = scratch("sampling");
+    let d: &Path = &dir;
+    write(d, "scene.txt", &scene_text(None, ""));
+    let t = Instant::now();
+    let base = [
+        "-input",
+        "scene.txt",
+        "-output",
+        "o.png",
+        "-size",
+        "100",
+        "100",
+    ];
+    for (extra, needle) in [
+        (&["-random_samples", "4000000000"][..], "samples per pixel"),
+        (&["-jittered_samples", "5000"][..], "samples per pixel"),
+        (&["-adaptive", "inf"][..], "adaptive threshold"),
+        (&["-render_samples", "v.png", "1000"][..], "GiB of memory"),
+        (
+            &["-size", "100", "1", "-render_filter", "v.tga", "700"][..],
+            "at most 65535 pixels per side",
+        ),
+        (&["-render_samples", "o.png", "2"][..], "are the same file"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend(extra);
+        refused(&raytracer(&args, d), needle);
+    }
+    assert!(t.elapsed() < Duration::from_secs(20));
+    assert!(!d.join("o.png").exists());
+}

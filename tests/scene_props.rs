@@ -5,7 +5,7 @@
 
 use glint::format::parse_scene;
 use glint::integrator::Whitted;
-use glint::render::{render_with, CameraModel, Control, PixelOffset};
+use glint::render::{render, CameraModel, PixelOffset};
 use glint::world::{BuildOptions, World};
 use proptest::prelude::*;
 use std::path::Path;
@@ -222,8 +222,7 @@ proptest! {
             transparent_shadows: true,
             ..Whitted::default()
         };
-        let control = Control { cancel: None, on_row: None };
-        let (frame, _) = render_with(&world, &camera, &integrator, (4, 4), PixelOffset::CENTER, control);
+        let (frame, _) = render(&world, &camera, &integrator, (4, 4), PixelOffset::CENTER);
         for c in &frame.color {
             prop_assert!(c.is_finite(), "colour {c} for\n{text}");
         }
