@@ -6,7 +6,8 @@ use crate::format::{load_scene_files, ParseError};
 use crate::integrator::Whitted;
 use crate::limits;
 use crate::output::{
-    check_image, check_path, check_writable, write_file, write_rgb, FileIdentity, OutputError,
+    check_image, check_not_input, check_path, check_writable, write_file, write_rgb, FileIdentity,
+    OutputError,
 };
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
@@ -149,6 +150,24 @@ impl JobError {
             JobError::Interrupted(_) => 130,
         }
     }
+}
+
+/// Loads `scene` for a command that writes the single file `output` (the
+/// `glint raytree`, `traverse` and `structure` views), rendering at `size`
+/// if `output` is an image: first checks that `output` can be written (and
+/// an image of that size fits memory and the format) and is not the scene,
+/// then, once the scene has named its meshes, that it is none of them.
+/// Nothing is written.
+pub fn load_scene_for(scene: &Path, output: &Path, size: (u32, u32)) -> Result<Scene, JobError> {
+    check_writable(output)?;
+    if check_path(output).is_ok() {
+        check_frame_memory(size.0, size.1, available_memory())?;
+        check_image(output, size.0, size.1)?;
+    }
+    check_not_input(output, &[scene.to_path_buf()])?;
+    let (loaded, files) = load_scene_files(scene)?;
+    check_not_input(output, &files)?;
+    Ok(loaded)
 }
 
 /// What a finished job measured.

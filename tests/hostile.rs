@@ -187,27 +187,39 @@ fn an_output_that_is_a_mesh_of_the_scene_is_refused() {
 }
 
 #[test]
-fn glint_raytree_never_overwrites_its_scene_or_meshes() {
+fn glint_views_never_overwrite_their_scene_or_meshes() {
     let dir = scratch("clash-raytree");
     let d: &Path = &dir;
     write(d, "tri.obj", TRIANGLE_OBJ);
     let text = scene_text(Some("tri.obj"), "");
     write(d, "scene.json", &text);
     for out in ["scene.json", "./tri.obj"] {
-        let args = [
-            "raytree",
-            "scene.json",
-            "--pixel",
-            "1",
-            "1",
-            "--size",
-            "4",
-            "4",
-            "-o",
-            out,
-        ];
-        refused(&glint(&args, d), "would overwrite the input file");
+        for command in [
+            &["raytree", "scene.json", "--pixel", "1", "1"][..],
+            &["traverse", "scene.json", "--pixel", "1", "1"][..],
+            &["structure", "scene.json"][..],
+        ] {
+            let mut args = command.to_vec();
+            args.extend(["--size", "4", "4", "-o", out]);
+            // `structure` writes no JSON: refused for that first.
+            let needle = match (command[0], out) {
+                ("structure", "scene.json") => "unsupported image format",
+                _ => "would overwrite the input file",
+            };
+            refused(&glint(&args, d), needle);
+        }
     }
+    // The image views check their size up front too.
+    let args = [
+        "structure",
+        "scene.json",
+        "--size",
+        "70000",
+        "1",
+        "-o",
+        "s.tga",
+    ];
+    refused(&glint(&args, d), "at most 65535 pixels per side");
     assert_eq!(std::fs::read_to_string(d.join("scene.json")).unwrap(), text);
     assert_eq!(
         std::fs::read_to_string(d.join("tri.obj")).unwrap(),

@@ -2,7 +2,6 @@
 
 use clap::Args;
 use glint::accel::AccelKind;
-use glint::format::load_scene_files;
 use glint::integrator::Whitted;
 use glint::limits;
 use glint::render::{CameraModel, PixelOffset};
@@ -82,11 +81,8 @@ fn run_inner(a: RaytreeArgs) -> Result<(), (u8, String)> {
     // Issue 15: the numbers' ranges, and never overwrite an input.
     limits::int_in("--bounces", a.bounces, 0, limits::MAX_BOUNCES).map_err(|e| (2, e))?;
     limits::finite_in("--weight", a.weight, 0.0, f32::MAX).map_err(|e| (2, e))?;
-    let refused = |e: glint::output::OutputError| (2, e.to_string());
-    glint::output::check_writable(&a.output).map_err(refused)?;
-    glint::output::check_not_input(&a.output, std::slice::from_ref(&a.scene)).map_err(refused)?;
-    let (scene, inputs) = load_scene_files(&a.scene).map_err(|e| (2, e.render()))?;
-    glint::output::check_not_input(&a.output, &inputs).map_err(refused)?;
+    let scene = glint::job::load_scene_for(&a.scene, &a.output, (w, h))
+        .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
     let world = World::build(
         &scene,
         BuildOptions {
