@@ -9,10 +9,11 @@ use crate::output::{
     check_image, check_not_input, check_path, check_writable, write_file, write_rgb, FileIdentity,
     OutputError,
 };
+use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, Settings,
-    TILE_SIZE,
+    render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
+    Sampler, Settings, TILE_SIZE,
 };
 use crate::scene::Scene;
 use crate::stats::Counters;
@@ -61,6 +62,12 @@ pub struct Job {
     pub filter_view: Option<(PathBuf, u32)>,
     /// Heat map of camera rays per pixel, with a scale bar.
     pub samples_image: Option<PathBuf>,
+    /// Heat maps of intersection tests and nodes visited per pixel, with
+    /// scale bars and totals (`--cost-image`).
+    pub cost_image: Option<PathBuf>,
+    /// Render only this piece of the frame and write it as an EXR with a
+    /// data window (`--tile I/N`, `--crop`); see [`crate::piece`].
+    pub piece: Option<PieceSpec>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -209,6 +216,51 @@ impl Job {
             .chain(self.samples_view.as_ref().map(|(p, _)| p.as_path()))
             .chain(self.filter_view.as_ref().map(|(p, _)| p.as_path()))
             .chain(self.samples_image.as_deref())
+            .chain(self.cost_image.as_deref())
+    }
+
+    /// A piece renders one image, an EXR: nothing else this job could write
+    /// would be a piece of anything.
+    fn check_piece(&self, p: &PieceSpec) -> Result<(), JobError> {
+        let exr = self
+            .output
+            .as_ref()
+            .is_some_and(|o| o.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")));
+        if !exr {
+            return Err(JobError::Usage(format!(
+                "{}: a piece of a frame is written as OpenEXR: give an output ending in .exr",
+                p.label
+            )));
+        }
+        if self.image_paths().count() > 1 {
+            return Err(JobError::Usage(format!(
+                "{}: only the colour image can be rendered in pieces (no depth, normals, views or cost images)",
+                p.label
+            )));
+        }
+        if self.adaptive.is_some() {
+            return Err(JobError::Usage(format!(
+                "{}: adaptive sampling shares corner rays between tiles, so it cannot be split into pieces",
+                p.label
+            )));
+        }
+        if p.rect.x1 > self.width || p.rect.row1 > self.height {
+            return Err(JobError::Usage(format!(
+                "{} lies outside the {}x{} frame",
+                p.label, self.width, self.height
+            )));
+        }
+        Ok(())
+    }
+
+    /// The hash of everything that decides the image (not the accelerator,
+    /// the thread count or the outputs, which do not).
+    fn piece_hash(&self, scene: &Scene, settings: &Settings) -> String {
+        let parts = format!(
+            "{settings:?}|{:?}|flatten {}|texture {:?}",
+            self.integrator, self.build.flatten, self.integrator.texture_space
+        );
+        crate::piece::settings_hash(scene, &parts)
     }
 
     /// Every file this job may write, with what it is: the images, their
@@ -241,6 +293,7 @@ impl Job {
                 self.filter_view.as_ref().map(|v| v.0.as_path()),
             ),
             ("samples heat map", self.samples_image.as_deref()),
+            ("cost image", self.cost_image.as_deref()),
         ];
         for (what, path) in views {
             if let Some(p) = path {
@@ -394,6 +447,8 @@ impl Job {
             samples_view: None,
             filter_view: None,
             samples_image: None,
+            cost_image: None,
+            piece: None,
             cancel: None,
             progress: false,
             stats_json: None,
@@ -417,6 +472,14 @@ impl Job {
     /// Loads, renders and writes every requested image.
     pub fn run(&self) -> Result<Report, JobError> {
         self.preflight()?;
+        if let Some(p) = &self.piece {
+            self.check_piece(p)?;
+        }
+        if self.cost_image.is_some() && self.adaptive.is_some() {
+            return Err(JobError::Usage(
+                "--cost-image does not work with --adaptive: adaptive sampling shares its corner rays between pixels, so their cost belongs to no single pixel".into(),
+            ));
+        }
         let t_load = Instant::now();
         let (scene, files) = load_scene_files(&self.input)?;
         // The meshes are known now; nothing has been written yet.
@@ -429,7 +492,9 @@ impl Job {
                     AccelKind::Grid { res } => res,
                     _ => None,
                 };
-                let v = voxelize(&World::build(&scene, self.build), res);
+                // World space: the cells become geometry of a new scene in
+                // the scene's own coordinates.
+                let v = voxelize(&World::build_world_space(&scene, self.build), res);
                 let cells = v.scene(&scene, view);
                 voxels = Some((v, view));
                 cells
@@ -439,7 +504,7 @@ impl Job {
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
-        let camera = CameraModel::new(&scene.camera);
+        let camera = CameraModel::new(&world.camera);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.threads.unwrap_or(0))
             .build()
@@ -465,8 +530,17 @@ impl Job {
         };
         let settings = self.settings();
         let start = Instant::now();
-        let rendered =
-            pool.install(|| render_image(&world, &camera, &self.integrator, &settings, control));
+        let rendered = pool.install(|| match &self.piece {
+            Some(p) => render_region(
+                &world,
+                &camera,
+                &self.integrator,
+                &settings,
+                control,
+                p.rect,
+            ),
+            None => render_image(&world, &camera, &self.integrator, &settings, control),
+        });
         let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();
         if let Some(b) = bar {
@@ -479,9 +553,31 @@ impl Job {
             legend(&mut canvas, v.max_count());
             frame.color = canvas.pixels;
         }
-        let complete = frame.is_complete();
+        let complete = match &self.piece {
+            Some(p) => (p.rect.row0..p.rect.row1).all(|r| frame.complete[r as usize]),
+            None => frame.is_complete(),
+        };
         let (w, h) = (self.width, self.height);
         let mut written = Vec::new();
+        if let (Some(out), Some(p)) = (&self.output, &self.piece) {
+            let out = if complete {
+                out.clone()
+            } else {
+                partial_path(out)
+            };
+            let hash = self.piece_hash(&scene, &settings);
+            let stats = serde_json::json!({
+                "rays_primary": counters.primary,
+                "rays_shadow": counters.shadow,
+                "rays_reflected": counters.reflected,
+                "rays_refracted": counters.refracted,
+                "intersection_tests": counters.intersection_tests,
+                "nodes_visited": counters.nodes_visited,
+                "render_ms": render_time.as_secs_f64() * 1e3,
+            });
+            crate::piece::write(&out, &frame, p, &hash, &stats)?;
+            written.push(out);
+        }
         let mut write_sized = |out: &PathBuf,
                                (w, h): (u32, u32),
                                pixels: &[crate::math::Vec3]|
@@ -497,8 +593,10 @@ impl Job {
         };
         let mut write =
             |out: &PathBuf, pixels: &[crate::math::Vec3]| write_sized(out, (w, h), pixels);
-        if let Some(out) = &self.output {
-            write(out, &frame.color)?;
+        if self.piece.is_none() {
+            if let Some(out) = &self.output {
+                write(out, &frame.color)?;
+            }
         }
         if let Some((t0, t1, out)) = &self.depth {
             write(out, &frame.depth_image(*t0, *t1))?;
@@ -516,6 +614,10 @@ impl Job {
         }
         if let Some(out) = &self.samples_image {
             write_view(out, heat_map(w, h, &frame.samples))?;
+        }
+        if let Some(out) = &self.cost_image {
+            let c = crate::viz::cost::image(&frame);
+            write_sized(out, (c.width, c.height), &c.pixels)?;
         }
         if !complete {
             return Err(JobError::Interrupted(written));
@@ -607,7 +709,7 @@ pub struct Stats {
 /// Bytes per pixel of a [`Frame`] (colour `Vec3`, depth `f32`, normal
 /// `Vec3`, sample count `u32`) plus the tile films' filter sums (`Vec3` and
 /// `f32`) that exist until the merge.
-pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16;
+pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16 + 16;
 
 pub use crate::limits::FALLBACK_AVAILABLE;
 
@@ -833,7 +935,7 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let msg = e.to_string();
         assert!(msg.contains("100000x100000"), "{msg}");
-        assert!(msg.contains("447.0 GiB"), "{msg}");
+        assert!(msg.contains("596.0 GiB"), "{msg}");
         assert!(msg.contains("12.0 GiB allowed"), "{msg}");
         // The product cannot overflow.
         assert!(check_frame_memory(u32::MAX, u32::MAX, u64::MAX).is_err());

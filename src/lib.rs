@@ -8,6 +8,7 @@ pub mod limits;
 pub mod material;
 pub mod math;
 pub mod output;
+pub mod piece;
 pub mod primitive;
 pub mod render;
 pub mod scene;

@@ -209,6 +209,25 @@ fn glint_views_never_overwrite_their_scene_or_meshes() {
             refused(&glint(&args, d), needle);
         }
     }
+    // `glint merge` never writes over one of its pieces.
+    write(d, "piece.exr", "not really an EXR");
+    for args in [
+        &["merge", "piece.exr", "-o", "./piece.exr"][..],
+        &[
+            "merge",
+            "piece.exr",
+            "-o",
+            "m.png",
+            "--stats-json",
+            "piece.exr",
+        ][..],
+    ] {
+        refused(&glint(args, d), "would overwrite the input file");
+    }
+    assert_eq!(
+        std::fs::read_to_string(d.join("piece.exr")).unwrap(),
+        "not really an EXR"
+    );
     // The image views check their size up front too.
     let args = [
         "structure",

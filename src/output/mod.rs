@@ -11,6 +11,7 @@ mod hdr;
 mod identity;
 mod ldr;
 
+pub use hdr::ExrWindow;
 pub use identity::{check_not_input, same_file, FileIdentity};
 pub use ldr::to_byte;
 
@@ -198,6 +199,33 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     write_atomically(path, |tmp| {
         std::fs::write(tmp, bytes).map_err(|e| e.to_string())
     })
+}
+
+/// Writes the window `(x0, y0, w, h)` of a `frame`-sized image as OpenEXR
+/// (data window = the window, display window = the frame), with `attrs` as
+/// text attributes in its header; atomically, like [`write_rgb`].
+pub fn write_exr_window(
+    path: &Path,
+    frame: (u32, u32),
+    window: (u32, u32, u32, u32),
+    pixels: &[Vec3],
+    attrs: &[(&str, String)],
+) -> Result<(), OutputError> {
+    if pixels.len() as u64 != u64::from(window.2) * u64::from(window.3) {
+        return Err(OutputError::Io {
+            path: path.into(),
+            message: "pixel count does not match the window".into(),
+        });
+    }
+    write_atomically(path, |tmp| {
+        hdr::write_exr_window(tmp, frame, window, pixels, attrs)
+    })
+}
+
+/// Reads an EXR's display window, data window, text attributes and pixels
+/// (what [`write_exr_window`] writes).
+pub fn read_exr_window(path: &Path) -> Result<ExrWindow, String> {
+    hdr::read_exr_window(path)
 }
 
 /// Runs `write` on a temporary file in `path`'s folder, then renames it to

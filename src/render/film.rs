@@ -48,6 +48,11 @@ impl Rect {
         (self.x0..self.x1).contains(&x) && (self.row0..self.row1).contains(&row)
     }
 
+    /// Whether the two share a pixel.
+    pub fn overlaps(&self, o: &Rect) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.row0 < o.row1 && o.row0 < self.row1
+    }
+
     /// Grown by `m` pixels on every side, clipped to a `w`×`h` image.
     pub fn grown(&self, m: u32, w: u32, h: u32) -> Rect {
         Rect {
@@ -81,6 +86,8 @@ pub struct TileFilm {
     nearest: Vec<f32>,
     /// Camera rays traced per tile pixel.
     pub samples: Vec<u32>,
+    /// What each tile pixel's rays cost.
+    pub cost: Vec<super::frame::PixelCost>,
 }
 
 impl TileFilm {
@@ -101,6 +108,7 @@ impl TileFilm {
             normal: vec![Vec3::ZERO; n],
             nearest: vec![f32::INFINITY; n],
             samples: vec![0; n],
+            cost: vec![Default::default(); n],
         }
     }
 
@@ -265,6 +273,7 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
                 frame.depth[p] = f.depth[k];
                 frame.normal[p] = f.normal[k];
                 frame.samples[p] = f.samples[k];
+                frame.cost[p] = f.cost[k];
             }
         }
     }

@@ -16,14 +16,15 @@ pub mod views;
 pub use adaptive::Adaptive;
 pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use filter::Filter;
-pub use frame::Frame;
+pub use frame::{Frame, PixelCost};
 pub use sampler::{GridLayout, SampleStream, Sampler, SamplerKind};
 
 use crate::integrator::{Integrator, NoObserver, Whitted};
 use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
 use crate::world::World;
-use film::{merge, tiles, Rect, TileFilm};
+pub use film::Rect;
+use film::{merge, tiles, TileFilm};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -160,12 +161,50 @@ pub fn render_image<I: Integrator>(
     if let Some(a) = settings.adaptive {
         return adaptive::render(world, camera, integrator, settings, &a, control);
     }
+    render_tiles(world, camera, integrator, settings, control, None)
+}
+
+/// Renders only what the pixels of `region` need: every tile whose film
+/// (the tile grown by the filter's support) reaches into `region`. Inside
+/// `region` the frame is bit for bit the frame [`render_image`] makes,
+/// because each pixel is reconstructed from the same tile films, each a pure
+/// function of the settings and the tile, summed in the same order; outside
+/// it the frame is incomplete. This is what makes a frame's pieces, rendered
+/// on different machines, merge exactly. Adaptive sampling is not supported
+/// (its corner rays are shared across tiles): the region is then ignored.
+pub fn render_region<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    settings: &Settings,
+    control: Control,
+    region: Rect,
+) -> Rendered {
+    if let Some(a) = settings.adaptive {
+        return adaptive::render(world, camera, integrator, settings, &a, control);
+    }
+    render_tiles(world, camera, integrator, settings, control, Some(region))
+}
+
+/// The tile loop of [`render_image`] and [`render_region`].
+fn render_tiles<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    settings: &Settings,
+    control: Control,
+    region: Option<Rect>,
+) -> Rendered {
     let (w, h) = settings.size;
     let rects = tiles(w, h, settings.tile_size);
+    let support = settings.filter.support();
     let done: Vec<Option<(TileFilm, Counters, Vec<SampleRecord>)>> = rects
         .par_iter()
         .map(|&rect| {
             if control.cancelled() {
+                return None;
+            }
+            if region.is_some_and(|r| !rect.grown(support, w, h).overlaps(&r)) {
                 return None;
             }
             let out = render_tile(world, camera, integrator, settings, rect);
@@ -214,6 +253,7 @@ fn render_tile<I: Integrator>(
         // Row 0 of the frame is the top of the image; screen j grows upwards.
         let j = h - 1 - row;
         for i in rect.x0..rect.x1 {
+            let before = counters;
             for k in 0..sampler.spp() {
                 let mut stream = sampler.stream((i, j), k);
                 let o = stream.next_2d();
@@ -237,6 +277,11 @@ fn render_tile<I: Integrator>(
                     });
                 }
             }
+            let k = film.tile_index(i, row);
+            film.cost[k] = PixelCost {
+                tests: counters.intersection_tests - before.intersection_tests,
+                nodes: counters.nodes_visited - before.nodes_visited,
+            };
         }
     }
     (film, counters, kept)

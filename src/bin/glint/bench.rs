@@ -154,7 +154,7 @@ fn measure(scene: &Scene, accel: AccelKind, integrator: &Whitted, size: u32, run
             },
         );
         builds.push(t.elapsed().as_secs_f64() * 1e3);
-        let cam = CameraModel::new(&scene.camera);
+        let cam = CameraModel::new(&world.camera);
         let t = Instant::now();
         let (_, c) = render(&world, &cam, integrator, (size, size), PixelOffset::CENTER);
         renders.push(t.elapsed().as_secs_f64() * 1e3);

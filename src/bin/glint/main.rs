@@ -23,6 +23,7 @@ struct Cli {
 }
 
 mod bench;
+mod merge;
 mod raytree;
 mod structure;
 mod traverse;
@@ -55,13 +56,15 @@ enum Command {
     },
     /// Render a scene to an image.
     #[command(long_about = RENDER_HELP)]
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Record every ray one pixel spawns: .json tree, .obj/.ply segments, or drawn over the image.
     Raytree(raytree::RaytreeArgs),
     /// Show the grid cells, octree leaves or BVH boxes an accelerator looks at for some pixels' eye rays.
     Traverse(traverse::TraverseArgs),
     /// Draw a BVH's or an octree's boxes at one depth (or its leaves) over the rendered image.
     Structure(structure::StructureArgs),
+    /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
+    Merge(merge::MergeArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -155,6 +158,18 @@ struct RenderArgs {
     /// Write a heat map of camera rays per pixel, with a scale bar.
     #[arg(long, value_name = "FILE")]
     samples_image: Option<PathBuf>,
+    /// Also write per-pixel cost: intersection tests (left) and nodes or cells visited (right), as heat maps with scale bars and totals.
+    #[arg(long, value_name = "FILE")]
+    /// Render only piece I of N (0-based horizontal bands of the frame) and write it as an EXR with that data window, for `glint merge`.
+    #[arg(long, value_name = "I/N", conflicts_with_all = ["tile_from_env", "crop"])]
+    tile: Option<String>,
+    /// Like --tile, with I read from an environment variable: SLURM_ARRAY_TASK_ID/N, JOB_COMPLETION_INDEX/N (Kubernetes), ...
+    #[arg(long, value_name = "VAR/N", conflicts_with = "crop")]
+    tile_from_env: Option<String>,
+    /// Render only the pixels X0..X1 x Y0..Y1 (half-open; x right, y down from the top) as an EXR piece.
+    #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"])]
+    crop: Option<Vec<u32>>,
+    cost_image: Option<PathBuf>,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_samples: Option<Vec<String>>,
@@ -180,8 +195,9 @@ fn real_main() -> ExitCode {
         Err(e) => return clap_error(e),
     };
     match cli.command {
-        Command::Render(a) => render(a),
+        Command::Render(a) => render(*a),
         Command::Info { scene } => info(scene),
+        Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
         Command::Traverse(a) => traverse::run(a),
         Command::Structure(a) => structure::run(a),
@@ -263,6 +279,27 @@ fn render(a: RenderArgs) -> ExitCode {
         });
     }
     job.samples_image = a.samples_image;
+    job.cost_image = a.cost_image;
+    let size = (job.width, job.height);
+    let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
+        (Some(t), _, _) => {
+            Some(glint::piece::parse_index(t).and_then(|(i, n)| glint::piece::band(i, n, size)))
+        }
+        (_, Some(t), _) => Some(
+            glint::piece::index_from_env(t, |v| std::env::var(v).ok())
+                .and_then(|(i, n)| glint::piece::band(i, n, size)),
+        ),
+        (_, _, Some(c)) => Some(glint::piece::crop([c[0], c[1], c[2], c[3]], size)),
+        _ => None,
+    };
+    match piece {
+        Some(Err(e)) => {
+            eprintln!("glint: {e}");
+            return ExitCode::from(2);
+        }
+        Some(Ok(p)) => job.piece = Some(p),
+        None => {}
+    }
     for (what, v, slot) in [
         ("--render-samples", a.render_samples, &mut job.samples_view),
         ("--render-filter", a.render_filter, &mut job.filter_view),
@@ -300,7 +337,8 @@ fn info(path: PathBuf) -> ExitCode {
         }
     };
     let s = scene.summary();
-    let world = glint::world::World::build(&scene, Default::default());
+    // World space: the bounds printed are the scene file's coordinates.
+    let world = glint::world::World::build_world_space(&scene, Default::default());
     let b = world.bounds();
     println!("scene       {}", path.display());
     println!("camera      {}", camera_name(&scene.camera));

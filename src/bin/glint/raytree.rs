@@ -83,14 +83,15 @@ fn run_inner(a: RaytreeArgs) -> Result<(), (u8, String)> {
     limits::finite_in("--weight", a.weight, 0.0, f32::MAX).map_err(|e| (2, e))?;
     let scene = glint::job::load_scene_for(&a.scene, &a.output, (w, h))
         .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
-    let world = World::build(
+    // World space: the exported rays are in the scene's coordinates.
+    let world = World::build_world_space(
         &scene,
         BuildOptions {
             accel: a.accel,
             flatten: true,
         },
     );
-    let camera = CameraModel::new(&scene.camera);
+    let camera = CameraModel::new(&world.camera);
     let integrator = Whitted {
         bounces: a.bounces,
         weight_cutoff: a.weight,

@@ -57,7 +57,8 @@ pub fn run(a: StructureArgs) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(e.exit_code() as u8, e.to_string()),
     };
-    let world = World::build(&scene, BuildOptions::default());
+    // World space: the boxes drawn (and exported) are in the scene's coordinates.
+    let world = World::build_world_space(&scene, BuildOptions::default());
     let boxes = match Structure::build(&world, a.accel) {
         Some(Structure::Bvh(b)) => glint::viz::structure::bvh_boxes(&b),
         Some(Structure::Octree(o)) => glint::viz::structure::octree_boxes(&o),
@@ -69,7 +70,7 @@ pub fn run(a: StructureArgs) -> ExitCode {
         glint::output::write_file(&a.output, traversal::to_obj(&segments).as_bytes())
             .map_err(|e| e.to_string())
     } else {
-        let camera = CameraModel::new(&scene.camera);
+        let camera = CameraModel::new(&world.camera);
         let shading = Whitted {
             shadows: true,
             ..Whitted::default()

@@ -73,8 +73,9 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
     // Never overwrites the scene or a mesh it names (issue 15).
     let scene = glint::job::load_scene_for(&a.scene, &a.output, (w, h))
         .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
-    let world = World::build(&scene, BuildOptions::default());
-    let camera = CameraModel::new(&scene.camera);
+    // World space: the exported cells and boxes are in the scene's coordinates.
+    let world = World::build_world_space(&scene, BuildOptions::default());
+    let camera = CameraModel::new(&world.camera);
     let structure = Structure::build(&world, a.accel).ok_or((
         2,
         "--accel none walks no structure: choose grid, octree or a bvh".to_string(),
