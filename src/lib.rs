@@ -4,6 +4,7 @@ pub mod format;
 pub mod integrator;
 pub mod job;
 pub mod light;
+pub mod limits;
 pub mod material;
 pub mod math;
 pub mod output;

@@ -47,7 +47,9 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
 pub fn attenuation_factor(k: Vec3, d: f32) -> f32 {
     let denom = k.x + k.y * d + k.z * d * d;
     if denom > 0.0 && denom.is_finite() {
-        1.0 / denom
+        // Capped: `attenuation 0 0 1e-30` (or a point right at the light)
+        // would otherwise make the light infinitely bright.
+        (1.0 / denom).min(crate::limits::MAX_ATTENUATION_GAIN)
     } else {
         1.0
     }

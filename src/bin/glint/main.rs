@@ -4,6 +4,7 @@ use clap::{Args, Parser, Subcommand};
 use glint::accel::AccelKind;
 use glint::format::load_scene;
 use glint::job::Job;
+use glint::limits;
 use glint::material::TextureSpace;
 use glint::render::{Adaptive, Filter, Sampler, SamplerKind};
 use std::io::IsTerminal;
@@ -94,10 +95,10 @@ struct RenderArgs {
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
     size: Vec<u32>,
-    /// Maximum number of reflection/refraction bounces.
+    /// Maximum number of reflection/refraction bounces (0 to 64).
     #[arg(long, default_value_t = 5)]
     bounces: u32,
-    /// Prune ray-tree branches contributing less than this.
+    /// Prune ray-tree branches contributing less than this (finite, >= 0).
     #[arg(long, default_value_t = 0.01)]
     weight: f32,
     /// Cast shadow rays.
@@ -109,7 +110,7 @@ struct RenderArgs {
     /// Light the back sides of surfaces.
     #[arg(long)]
     shade_back: bool,
-    /// Worker threads (default: all cores).
+    /// Worker threads, 1 to 1024 (default: all cores; more than 4 per core are clamped).
     #[arg(long)]
     threads: Option<usize>,
     /// Print statistics.
@@ -189,7 +190,10 @@ fn main() -> ExitCode {
 }
 
 fn real_main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return clap_error(e),
+    };
     match cli.command {
         Command::Render(a) => render(*a),
         Command::Info { scene } => info(scene),
@@ -205,18 +209,20 @@ fn real_main() -> ExitCode {
             runs,
             none_limit,
             only,
-        } => match bench::run(&bench::BenchArgs {
-            scenes,
-            course,
-            meshes: mesh,
-            size,
-            runs,
-            none_limit_s: none_limit,
-            only,
+        } => match check_bench(size, runs, none_limit).and_then(|()| {
+            bench::run(&bench::BenchArgs {
+                scenes,
+                course,
+                meshes: mesh,
+                size,
+                runs,
+                none_limit_s: none_limit,
+                only,
+            })
         }) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
-                eprintln!("glint: {e}");
+                eprintln!("glint: {}", limits::bounded_message(&e));
                 ExitCode::from(2)
             }
         },
@@ -224,14 +230,15 @@ fn real_main() -> ExitCode {
 }
 
 fn render(a: RenderArgs) -> ExitCode {
-    let mut job = Job::new(a.scene, a.size[0], a.size[1]);
+    let mut job = Job::new(a.scene.clone(), a.size[0], a.size[1]);
+    if let Err(msg) = check_numbers(&a, &mut job) {
+        eprintln!("glint: {}", limits::bounded_message(&msg));
+        return ExitCode::from(2);
+    }
     job.output = Some(a.output);
-    job.integrator.bounces = a.bounces;
-    job.integrator.weight_cutoff = a.weight;
     job.integrator.shadows = a.shadows || a.transparent_shadows;
     job.integrator.transparent_shadows = a.transparent_shadows;
     job.integrator.shade_back = a.shade_back;
-    job.threads = a.threads;
     job.build.accel = a.accel;
     job.integrator.texture_space = match a.texture_space {
         Space::World => TextureSpace::World,
@@ -243,9 +250,13 @@ fn render(a: RenderArgs) -> ExitCode {
     job.cancel = Some(glint::job::interrupt_flag());
     job.normals = a.normals;
     if let Some(d) = a.depth {
-        let (Ok(t0), Ok(t1)) = (d[0].parse(), d[1].parse()) else {
-            eprintln!("glint: --depth expects two numbers and a file, got {d:?}");
-            return ExitCode::from(2);
+        let t = |s: &str| limits::parse_finite("--depth", s, f32::MIN, f32::MAX);
+        let (t0, t1) = match (t(&d[0]), t(&d[1])) {
+            (Ok(t0), Ok(t1)) => (t0, t1),
+            (Err(msg), _) | (_, Err(msg)) => {
+                eprintln!("glint: {msg} (--depth T0 T1 FILE)");
+                return ExitCode::from(2);
+            }
         };
         job.depth = Some((t0, t1, PathBuf::from(&d[2])));
     }
@@ -312,7 +323,7 @@ fn render(a: RenderArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("glint: {e}");
+            eprintln!("glint: {}", limits::bounded_message(&e.to_string()));
             ExitCode::from(e.exit_code() as u8)
         }
     }
@@ -322,7 +333,7 @@ fn info(path: PathBuf) -> ExitCode {
     let scene = match load_scene(&path) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("glint: {}", e.render());
+            eprintln!("glint: {}", limits::bounded_message(&e.render()));
             return ExitCode::from(2);
         }
     };
@@ -351,6 +362,45 @@ fn info(path: PathBuf) -> ExitCode {
         );
     }
     ExitCode::SUCCESS
+}
+
+/// Prints a command-line error as clap would, but never more than a few
+/// kilobytes: clap quotes a bad value whole, and one argument may be 128 kB.
+fn clap_error(e: clap::Error) -> ExitCode {
+    let text = e.render().to_string();
+    if !e.use_stderr() || text.len() <= 8192 {
+        e.exit()
+    }
+    eprint!("{}", limits::bounded_message(&text));
+    ExitCode::from(2)
+}
+
+/// `glint bench`'s numbers: a size the frame check allows, 1 to 1000 runs,
+/// and a finite time limit.
+fn check_bench(size: u32, runs: usize, none_limit: f64) -> Result<(), String> {
+    limits::int_in("--size", size, 1, 16_384)?;
+    limits::int_in("--runs", runs, 1, 1000)?;
+    if !(none_limit.is_finite() && none_limit >= 0.0) {
+        return Err(format!(
+            "--none-limit: {none_limit} is not a finite number of seconds >= 0"
+        ));
+    }
+    Ok(())
+}
+
+/// The numeric render flags, in their documented ranges ([`limits`]):
+/// `--weight nan` rendered before issue 15, `--threads 100000` hung.
+fn check_numbers(a: &RenderArgs, job: &mut Job) -> Result<(), String> {
+    job.integrator.bounces = limits::int_in("--bounces", a.bounces, 0, limits::MAX_BOUNCES)?;
+    job.integrator.weight_cutoff = limits::finite_in("--weight", a.weight, 0.0, f32::MAX)?;
+    if let Some(n) = a.threads {
+        let (n, note) = limits::threads("--threads", n, limits::cores())?;
+        if let Some(note) = note {
+            eprintln!("glint: {note}");
+        }
+        job.threads = Some(n);
+    }
+    Ok(())
 }
 
 fn camera_name(c: &glint::scene::Camera) -> &'static str {

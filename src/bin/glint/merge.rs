@@ -23,11 +23,27 @@ pub struct MergeArgs {
 /// exactly one frame.
 pub fn run(a: MergeArgs) -> ExitCode {
     let fail = |code: u8, msg: String| {
-        eprintln!("glint merge: {msg}");
+        eprintln!("glint merge: {}", glint::limits::bounded_message(&msg));
         ExitCode::from(code)
     };
     if let Err(e) = glint::output::check_path(&a.output) {
         return fail(2, e.to_string());
+    }
+    // Issue 15: no output may be a piece, or the other output.
+    let mut outputs = vec![&a.output];
+    outputs.extend(&a.stats_json);
+    for out in &outputs {
+        let checked = glint::output::check_writable(out)
+            .and_then(|()| glint::output::check_not_input(out, &a.pieces));
+        if let Err(e) = checked {
+            return fail(2, e.to_string());
+        }
+    }
+    if let Some(json) = &a.stats_json {
+        if glint::output::same_file(json, &a.output) {
+            let msg = "the merged image and the statistics file are the same file";
+            return fail(2, format!("{}: {msg}; choose two names", json.display()));
+        }
     }
     let mut pieces = Vec::new();
     for p in &a.pieces {
@@ -45,8 +61,8 @@ pub fn run(a: MergeArgs) -> ExitCode {
     }
     if let Some(path) = &a.stats_json {
         let text = serde_json::to_string_pretty(&stats).unwrap_or_default();
-        if let Err(e) = std::fs::write(path, text + "\n") {
-            return fail(1, format!("{}: {e}", path.display()));
+        if let Err(e) = glint::output::write_file(path, (text + "\n").as_bytes()) {
+            return fail(1, e.to_string());
         }
     }
     println!(

@@ -3,7 +3,6 @@
 
 use clap::Args;
 use glint::accel::AccelKind;
-use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::render::{render, screen_point, CameraModel, PixelOffset};
 use glint::viz::draw::Canvas;
@@ -39,7 +38,7 @@ pub fn run(a: TraverseArgs) -> ExitCode {
     match run_inner(a) {
         Ok(()) => ExitCode::SUCCESS,
         Err((code, msg)) => {
-            eprintln!("glint: {msg}");
+            eprintln!("glint: {}", glint::limits::bounded_message(&msg));
             ExitCode::from(code)
         }
     }
@@ -71,7 +70,9 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
     if !matches!(ext.as_str(), "obj" | "json") {
         glint::output::check_path(&a.output).map_err(|e| (2, format!("{e} (or .obj, .json)")))?;
     }
-    let scene = load_scene(&a.scene).map_err(|e| (2, e.render()))?;
+    // Never overwrites the scene or a mesh it names (issue 15).
+    let scene = glint::job::load_scene_for(&a.scene, &a.output, (w, h))
+        .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
     // World space: the exported cells and boxes are in the scene's coordinates.
     let world = World::build_world_space(&scene, BuildOptions::default());
     let camera = CameraModel::new(&world.camera);
@@ -100,15 +101,16 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
             })).collect::<Vec<_>>(),
         }));
     }
-    let io = |e: std::io::Error| (1, format!("{}: {e}", a.output.display()));
+    let io = |e: glint::output::OutputError| (1, e.to_string());
     match ext.as_str() {
-        "obj" => std::fs::write(&a.output, traversal::to_obj(&segments)).map_err(io)?,
+        "obj" => glint::output::write_file(&a.output, traversal::to_obj(&segments).as_bytes())
+            .map_err(io)?,
         "json" => {
             let text = serde_json::to_string_pretty(
                 &serde_json::json!({ "accel": a.accel.to_string(), "rays": json }),
             )
             .map_err(|e| (1, e.to_string()))?;
-            std::fs::write(&a.output, text + "\n").map_err(io)?;
+            glint::output::write_file(&a.output, (text + "\n").as_bytes()).map_err(io)?;
         }
         _ => {
             let shading = Whitted {
