@@ -202,7 +202,7 @@ pub fn render_image<I: Integrator>(
 
 /// Rows per work unit of [`render_bands`]: small enough to balance the load
 /// over many threads, large enough that each unit has thousands of rays.
-pub const BAND_ROWS: usize = 8;
+pub const BAND_ROWS: usize = 2;
 
 /// The loop for filters confined to their own pixel (support 0: box 0.5, the
 /// course's default, and every one-sample render). No sample reaches another
@@ -227,6 +227,7 @@ fn render_bands<I: Integrator>(
     let fixed = sampler
         .fixed_offset()
         .map(|o| (o, filter.weight(o.x - 0.5, o.y - 0.5)));
+    let one = sampler.spp() == 1;
     let parts: Vec<(Counters, Vec<SampleRecord>)> = frame
         .color
         .par_chunks_mut(wu * BAND_ROWS)
@@ -268,11 +269,20 @@ fn render_bands<I: Integrator>(
                             &mut counters,
                             &mut NoObserver,
                         );
-                        if wt != 0.0 {
+                        if wt == 1.0 {
+                            // `c · 1` is `c`: the box filters' case.
+                            sum += c;
+                            wsum += 1.0;
+                        } else if wt != 0.0 {
                             sum += c * wt;
                             wsum += wt;
                         }
-                        let d2 = (o - settings.reference).length_squared();
+                        // A lone sample is the nearest: skip the distance.
+                        let d2 = if one {
+                            0.0
+                        } else {
+                            (o - settings.reference).length_squared()
+                        };
                         if d2 < nearest {
                             nearest = d2;
                             depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
@@ -286,7 +296,14 @@ fn render_bands<I: Integrator>(
                             });
                         }
                     }
-                    color[p] = if wsum > 0.0 { sum / wsum } else { Vec3::ZERO };
+                    // `sum / 1` is `sum`: skip the division of one-ray renders.
+                    color[p] = if wsum == 1.0 {
+                        sum
+                    } else if wsum > 0.0 {
+                        sum / wsum
+                    } else {
+                        Vec3::ZERO
+                    };
                     samples[p] = sampler.spp();
                 }
                 *done = true;
