@@ -173,17 +173,21 @@ fn run_all(data: &CourseData, dir: &std::path::Path) -> Vec<CmdLine> {
 /// are (antialiasing and wider filters lower it).
 fn sharpness(w: u32, h: u32, px: &[[u8; 3]]) -> f64 {
     let (w, h) = (w as usize, h as usize);
+    let d = |a: [u8; 3], b: [u8; 3]| -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(&x, y)| (x as f64 - y as f64).abs())
+            .sum()
+    };
     let mut sum = 0.0;
     for y in 0..h {
         for x in 0..w {
-            for c in 0..3 {
-                let v = px[y * w + x][c] as f64;
-                if x + 1 < w {
-                    sum += (px[y * w + x + 1][c] as f64 - v).abs();
-                }
-                if y + 1 < h {
-                    sum += (px[(y + 1) * w + x][c] as f64 - v).abs();
-                }
+            let p = px[y * w + x];
+            if x + 1 < w {
+                sum += d(px[y * w + x + 1], p);
+            }
+            if y + 1 < h {
+                sum += d(px[(y + 1) * w + x], p);
             }
         }
     }

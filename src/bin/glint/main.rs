@@ -268,7 +268,7 @@ fn render(a: RenderArgs) -> ExitCode {
     }
     job.filter = a.filter;
     if let Some(t) = a.adaptive {
-        if !(t >= 0.0) {
+        if t.is_nan() || t < 0.0 {
             eprintln!("glint: --adaptive {t}: the threshold must be at least 0");
             return ExitCode::from(2);
         }
