@@ -1,6 +1,7 @@
 //! One render as both command lines describe it: load, build, render, write.
 //! The binaries only translate their flags into a [`Job`].
 
+use crate::accel::AccelKind;
 use crate::format::{load_scene, ParseError};
 use crate::integrator::Whitted;
 use crate::output::{check_path, write_rgb, OutputError};
@@ -11,6 +12,8 @@ use crate::render::{
 };
 use crate::scene::Scene;
 use crate::stats::Counters;
+use crate::viz::draw::Canvas;
+use crate::viz::grid::{legend, voxelize, GridView};
 use crate::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -54,6 +57,9 @@ pub struct Job {
     pub filter_view: Option<(PathBuf, u32)>,
     /// Heat map of camera rays per pixel, with a scale bar.
     pub samples_image: Option<PathBuf>,
+    /// Heat maps of intersection tests and nodes visited per pixel, with
+    /// scale bars and totals (`--cost-image`).
+    pub cost_image: Option<PathBuf>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -61,6 +67,10 @@ pub struct Job {
     pub progress: bool,
     /// Write the statistics as JSON here.
     pub stats_json: Option<PathBuf>,
+    /// Render the uniform grid's occupied cells instead of the scene
+    /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
+    /// the one `build.accel` asks for, if it is a grid.
+    pub visualize_grid: Option<GridView>,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -156,6 +166,8 @@ pub struct Report {
     pub render: Duration,
     /// Number of primitives in the world.
     pub primitives: usize,
+    /// Bounds of the world's bounded primitives (planes excluded).
+    pub bounds: crate::math::Aabb,
     /// The rendered planes.
     pub frame: Frame,
     /// The sampling settings rendered with.
@@ -174,6 +186,7 @@ impl Job {
             .chain(self.samples_view.as_ref().map(|(p, _)| p.as_path()))
             .chain(self.filter_view.as_ref().map(|(p, _)| p.as_path()))
             .chain(self.samples_image.as_deref())
+            .chain(self.cost_image.as_deref())
     }
 
     /// A job with the course's defaults (no outputs yet).
@@ -195,9 +208,11 @@ impl Job {
             samples_view: None,
             filter_view: None,
             samples_image: None,
+            cost_image: None,
             cancel: None,
             progress: false,
             stats_json: None,
+            visualize_grid: None,
         }
     }
 
@@ -226,9 +241,28 @@ impl Job {
         for path in self.image_paths() {
             check_path(path)?;
         }
+        if self.cost_image.is_some() && self.adaptive.is_some() {
+            return Err(JobError::Usage(
+                "--cost-image does not work with --adaptive: adaptive sampling shares its corner rays between pixels, so their cost belongs to no single pixel".into(),
+            ));
+        }
         let t_load = Instant::now();
         let scene = load_scene(&self.input)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+        let mut voxels = None;
+        let scene = match self.visualize_grid {
+            Some(view) => {
+                let res = match self.build.accel {
+                    AccelKind::Grid { res } => res,
+                    _ => None,
+                };
+                let v = voxelize(&World::build(&scene, self.build), res);
+                let cells = v.scene(&scene, view);
+                voxels = Some((v, view));
+                cells
+            }
+            None => scene,
+        };
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
@@ -257,6 +291,13 @@ impl Job {
         let render_time = start.elapsed();
         if let Some(b) = bar {
             b.finish_and_clear();
+        }
+        let mut frame = frame;
+        if let Some((v, GridView::Count)) = &voxels {
+            let mut canvas =
+                Canvas::new(frame.width, frame.height, std::mem::take(&mut frame.color));
+            legend(&mut canvas, v.max_count());
+            frame.color = canvas.pixels;
         }
         let complete = frame.is_complete();
         let (w, h) = (self.width, self.height);
@@ -296,6 +337,10 @@ impl Job {
         if let Some(out) = &self.samples_image {
             write_view(out, heat_map(w, h, &frame.samples))?;
         }
+        if let Some(out) = &self.cost_image {
+            let c = crate::viz::cost::image(&frame);
+            write_sized(out, (c.width, c.height), &c.pixels)?;
+        }
         if !complete {
             return Err(JobError::Interrupted(written));
         }
@@ -308,6 +353,7 @@ impl Job {
             world_ms,
             render: render_time,
             primitives: world.prims.len(),
+            bounds: world.bounds(),
             frame,
             settings,
         };
@@ -390,7 +436,7 @@ pub struct Stats {
 /// Bytes per pixel of a [`Frame`] (colour `Vec3`, depth `f32`, normal
 /// `Vec3`, sample count `u32`) plus the tile films' filter sums (`Vec3` and
 /// `f32`) that exist until the merge.
-pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16;
+pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16 + 16;
 
 /// Memory assumed available where `/proc/meminfo` cannot be read.
 pub const FALLBACK_AVAILABLE: u64 = 16 << 30;
@@ -542,6 +588,76 @@ pub fn run_guarded(
     }
 }
 
+/// The course's statistics report (`raytracing_stats.C`, NOTES.md A6), for
+/// `raytracer -stats`: time, pixels, scene bounds, grid cells, rays by kind,
+/// intersections, cells traversed and the per-ray figures, which count
+/// non-shadow plus shadow rays. `glint --stats` and `--stats-json` keep the
+/// full counters.
+pub fn course_stats_text(report: &Report) -> String {
+    // The grid's resolution, from its description (`grid 10x10x7`).
+    let grid: Option<[u32; 3]> = report.accel.strip_prefix("grid ").and_then(|r| {
+        let v: Vec<u32> = r.split('x').filter_map(|n| n.trim().parse().ok()).collect();
+        <[u32; 3]>::try_from(v).ok()
+    });
+    let bounds = Some(report.bounds);
+    let st = report.stats();
+    let secs = report.render.as_secs_f64();
+    let whole = secs as u64;
+    let pixels = u64::from(st.width) * u64::from(st.height);
+    let rays = st.rays_total.max(1) as f64;
+    let non_shadow = st.rays_total - st.rays_shadow;
+    let mut s =
+        String::from("********************************************\nRAY TRACING STATISTICS\n");
+    let mut line = |k: &str, v: String| s.push_str(&format!("  {k:<27}{v}\n"));
+    line(
+        "total time",
+        format!("{}:{:02}:{:02}", whole / 3600, whole / 60 % 60, whole % 60),
+    );
+    line(
+        "num pixels",
+        format!("{pixels} ({}x{})", st.width, st.height),
+    );
+    line(
+        "scene bounds",
+        match bounds.filter(|b| !b.is_empty()) {
+            Some(b) => format!(
+                "({:.4}, {:.4}, {:.4}) -> ({:.4}, {:.4}, {:.4})",
+                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line(
+        "num grid cells",
+        match grid {
+            Some([x, y, z]) => format!(
+                "{} ({x}x{y}x{z})",
+                u64::from(x) * u64::from(y) * u64::from(z)
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line("num non-shadow rays", non_shadow.to_string());
+    line("num shadow rays", st.rays_shadow.to_string());
+    line("total intersections", st.intersection_tests.to_string());
+    line("total cells traversed", st.nodes_visited.to_string());
+    line("rays per second", format!("{:.1}", rays / secs.max(1e-9)));
+    line(
+        "rays per pixel",
+        format!("{:.3}", rays / pixels.max(1) as f64),
+    );
+    line(
+        "intersections per ray",
+        format!("{:.3}", st.intersection_tests as f64 / rays),
+    );
+    line(
+        "cells traversed per ray",
+        format!("{:.3}", st.nodes_visited as f64 / rays),
+    );
+    s.push_str("********************************************\n");
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -554,7 +670,7 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let msg = e.to_string();
         assert!(msg.contains("100000x100000"), "{msg}");
-        assert!(msg.contains("447.0 GiB"), "{msg}");
+        assert!(msg.contains("596.0 GiB"), "{msg}");
         assert!(msg.contains("12.0 GiB allowed"), "{msg}");
         // The product cannot overflow.
         assert!(check_frame_memory(u32::MAX, u32::MAX, u64::MAX).is_err());

@@ -173,21 +173,16 @@ fn run_all(data: &CourseData, dir: &std::path::Path) -> Vec<CmdLine> {
 /// are (antialiasing and wider filters lower it).
 fn sharpness(w: u32, h: u32, px: &[[u8; 3]]) -> f64 {
     let (w, h) = (w as usize, h as usize);
-    let d = |a: [u8; 3], b: [u8; 3]| -> f64 {
-        a.iter()
-            .zip(b)
-            .map(|(&x, y)| (x as f64 - y as f64).abs())
-            .sum()
-    };
     let mut sum = 0.0;
     for y in 0..h {
         for x in 0..w {
-            let p = px[y * w + x];
-            if x + 1 < w {
-                sum += d(px[y * w + x + 1], p);
-            }
-            if y + 1 < h {
-                sum += d(px[(y + 1) * w + x], p);
+            let here = px[y * w + x];
+            let right = (x + 1 < w).then(|| px[y * w + x + 1]);
+            let below = (y + 1 < h).then(|| px[(y + 1) * w + x]);
+            for (c, &v) in here.iter().enumerate() {
+                for n in right.iter().chain(below.iter()) {
+                    sum += (n[c] as f64 - v as f64).abs();
+                }
             }
         }
     }

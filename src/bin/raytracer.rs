@@ -5,6 +5,7 @@ use glint::accel::AccelKind;
 use glint::job::Job;
 use glint::material::TextureSpace;
 use glint::render::{Adaptive, Filter, GridLayout, PixelOffset, Sampler, SamplerKind};
+use glint::viz::grid::GridView;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -66,59 +67,10 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "where textures are looked up (default world)",
     ),
     (
-        "-uniform_samples",
-        "N",
-        "N samples per pixel on a regular grid (the reference's (a+1)/(k+1) layout)",
+        "-stats",
+        "",
+        "print the course's statistics report (time, rays, intersections, cells)",
     ),
-    ("-random_samples", "N", "N random samples per pixel"),
-    (
-        "-jittered_samples",
-        "N",
-        "N samples per pixel, one per stratum of a grid",
-    ),
-    (
-        "-sobol_samples",
-        "N",
-        "N Owen-scrambled Sobol samples per pixel",
-    ),
-    ("-seed", "S", "seed of the random samplers (default 0)"),
-    (
-        "-box_filter",
-        "R",
-        "box filter of radius R pixels (default 0.5)",
-    ),
-    ("-tent_filter", "R", "tent filter of radius R pixels"),
-    (
-        "-gaussian_filter",
-        "SIGMA",
-        "gaussian filter, cut at 2 sigma",
-    ),
-    (
-        "-render_samples",
-        "FILE ZOOM",
-        "draw every sample in its pixel, zoomed",
-    ),
-    (
-        "-render_filter",
-        "FILE ZOOM",
-        "draw the filter's weights, zoomed",
-    ),
-    (
-        "-adaptive",
-        "T",
-        "Whitted's adaptive supersampling: split where corners differ by more than T",
-    ),
-    (
-        "-max_depth",
-        "D",
-        "deepest adaptive subdivision (default 2)",
-    ),
-    (
-        "-samples_image",
-        "FILE",
-        "heat map of camera rays per pixel, with a scale bar",
-    ),
-    ("-stats", "", "print ray and traversal statistics"),
     ("-stats_json", "FILE", "write the statistics as JSON"),
     ("-threads", "N", "worker threads (default: all cores)"),
     ("-quiet", "", "no progress bar"),
@@ -136,6 +88,74 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "-gouraud",
         "",
         "accepted and ignored (the course's OpenGL preview)",
+    ),
+    (
+        "-visualize_grid",
+        "",
+        "render the grid's occupied cells as grey boxes (with -grid)",
+    ),
+    (
+        "-visualize_grid_count",
+        "",
+        "render the grid's cells coloured by primitive count, with a legend",
+    ),
+    (
+        "-uniform_samples",
+        "N",
+        "N samples per pixel on a regular grid",
+    ),
+    (
+        "-random_samples",
+        "N",
+        "N samples per pixel, uniformly random",
+    ),
+    (
+        "-jittered_samples",
+        "N",
+        "N samples per pixel, one per stratum",
+    ),
+    (
+        "-sobol_samples",
+        "N",
+        "N samples per pixel, Owen-scrambled Sobol",
+    ),
+    ("-seed", "S", "seed of the random samplers (default 0)"),
+    ("-box_filter", "R", "box reconstruction filter of radius R"),
+    (
+        "-tent_filter",
+        "R",
+        "tent reconstruction filter of radius R",
+    ),
+    (
+        "-gaussian_filter",
+        "SIGMA",
+        "Gaussian reconstruction filter",
+    ),
+    (
+        "-render_samples",
+        "FILE ZOOM",
+        "the course's view of the sample positions",
+    ),
+    (
+        "-render_filter",
+        "FILE ZOOM",
+        "the course's view of the filter's weights",
+    ),
+    (
+        "-adaptive",
+        "T",
+        "Whitted's adaptive corner subdivision, threshold T",
+    ),
+    ("-max_depth", "D", "deepest subdivision of -adaptive"),
+    (
+        "-samples_image",
+        "FILE",
+        "heat map of rays per pixel, with a scale bar",
+    ),
+    (
+        "-cost_image",
+        "FILE",
+        "heat maps of intersection tests and nodes visited per pixel",
     ),
     ("-help", "", "print this help (also -h, --help)"),
 ];
@@ -176,7 +196,7 @@ fn real_main() -> ExitCode {
     match job.run() {
         Ok(report) => {
             if stats {
-                print!("{}", report.stats_text());
+                print!("{}", glint::job::course_stats_text(&report));
             }
             ExitCode::SUCCESS
         }
@@ -249,6 +269,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 );
             }
             "-no_flatten" => job.build.flatten = false,
+            "-visualize_grid" => job.visualize_grid = Some(GridView::Occupied),
+            "-visualize_grid_count" => job.visualize_grid = Some(GridView::Count),
             "-texture_space" => {
                 job.integrator.texture_space = match value("world or object")?.as_str() {
                     "world" => TextureSpace::World,
@@ -311,6 +333,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             }
             "-max_depth" => max_depth = number(flag, value("a depth")?)?,
             "-samples_image" => job.samples_image = Some(PathBuf::from(value("a file")?)),
+            "-cost_image" => job.cost_image = Some(PathBuf::from(value("a file")?)),
             other => match PREVIEW_ONLY.iter().find(|(f, _)| *f == other) {
                 Some((f, n)) => {
                     for _ in 0..*n {

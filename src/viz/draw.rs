@@ -103,6 +103,69 @@ pub fn clip(a: Vec2, b: Vec2, lo: Vec2, hi: Vec2) -> Option<(Vec2, Vec2)> {
     (t0 <= t1).then(|| (a + d * t0, a + d * t1))
 }
 
+/// A 3×5 pixel font for the characters scale bars and legends need: digits,
+/// `.`, `-`, `+`, `e`, `x`, `%`, `/` and space. Each glyph is five rows of
+/// three bits, most significant bit on the left.
+fn glyph(c: char) -> [u8; 5] {
+    match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 3, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 2, 2],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
+        '-' => [0, 0, 7, 0, 0],
+        '+' => [0, 2, 7, 2, 0],
+        'e' => [0, 7, 7, 4, 7],
+        'x' => [0, 5, 2, 5, 0],
+        '%' => [5, 1, 2, 4, 5],
+        '/' => [1, 1, 2, 4, 4],
+        _ => [0; 5],
+    }
+}
+
+/// Width in pixels of `text` drawn at `scale` (glyphs 3 wide plus 1 apart).
+pub fn text_width(text: &str, scale: u32) -> u32 {
+    (text.chars().count() as u32 * 4).saturating_sub(1) * scale
+}
+
+impl Canvas {
+    /// Writes `text` with its lower-left corner at `p` (pixel coordinates, y
+    /// up), each font pixel `scale`×`scale`, on a black backing so it reads
+    /// on any image.
+    pub fn text(&mut self, p: Vec2, text: &str, c: Vec3, scale: u32) {
+        let s = scale.max(1) as i64;
+        let left = p.x.floor() as i64;
+        let top = (self.height as f32 - p.y).floor() as i64 - 5 * s;
+        let width = text_width(text, scale) as i64;
+        for y in top - 1..top + 5 * s + 1 {
+            for x in left - 1..left + width + 1 {
+                self.put(x, y, Vec3::ZERO);
+            }
+        }
+        for (k, ch) in text.chars().enumerate() {
+            let g = glyph(ch);
+            for (row, bits) in g.iter().enumerate() {
+                for col in 0..3 {
+                    if bits & (4 >> col) != 0 {
+                        for dy in 0..s {
+                            for dx in 0..s {
+                                let x = left + (k as i64 * 4 + col) * s + dx;
+                                self.put(x, top + row as i64 * s + dy, c);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
