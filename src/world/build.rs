@@ -7,7 +7,9 @@
 //! sphere under non-uniform scale) keeps a [`Transformed`] wrapper.
 
 use super::{Primitive, World};
-use crate::accel::{AccelKind, Aggregate, Brute, Bvh, Grid, Octree};
+use crate::accel::{
+    AccelKind, Aggregate, Brute, Bvh, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree, Storage,
+};
 use crate::math::{Mat4, Vec3};
 use crate::scene::{Material, Node, Phong, Scene, Shape as Desc};
 use crate::shape::{Plane, Shape, Sphere, Transformed, Triangle};
@@ -43,11 +45,11 @@ impl World {
             default_material,
             flatten: opts.flatten,
         };
-        f.node(&scene.root, Mat4::IDENTITY, 0);
+        let tree = f.node(&scene.root, Mat4::IDENTITY, 0);
         let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
             (0..f.prims.len() as u32).partition(|&i| f.prims[i as usize].bounds().is_finite());
         let start = Instant::now();
-        let accel = build_aggregate(opts.accel, &f.prims, bounded);
+        let accel = build_aggregate(opts.accel, &f.prims, bounded, &tree);
         World {
             build_ms: start.elapsed().as_secs_f64() * 1e3,
             prims: f.prims,
@@ -61,12 +63,23 @@ impl World {
     }
 }
 
-fn build_aggregate(kind: AccelKind, prims: &[Primitive], ids: Vec<u32>) -> Box<dyn Aggregate> {
+/// `tree` is the scene's hierarchy over the primitives, for `bvh-hierarchy`.
+fn build_aggregate(
+    kind: AccelKind,
+    prims: &[Primitive],
+    ids: Vec<u32>,
+    tree: &SceneTree,
+) -> Box<dyn Aggregate> {
     match kind {
         AccelKind::None => Box::new(Brute::new(prims, ids)),
         AccelKind::Grid { res } => Box::new(Grid::new(prims, ids, res)),
         AccelKind::Octree => Box::new(Octree::new(prims, ids)),
         AccelKind::Bvh(split) => Box::new(Bvh::new(prims, ids, split)),
+        AccelKind::OctreeInner => Box::new(Octree::with_storage(prims, ids, Storage::Inner)),
+        AccelKind::NestedGrid { threshold, depth } => {
+            Box::new(NestedGrid::new(prims, ids, threshold, depth))
+        }
+        AccelKind::BvhHierarchy => Box::new(HierarchyBvh::new(prims, ids, tree)),
     }
 }
 
@@ -78,65 +91,78 @@ struct Flattener {
 }
 
 impl Flattener {
-    fn node(&mut self, node: &Node, m: Mat4, instance: u32) {
+    /// Flattens `node` seen through `m` and returns its tree over the
+    /// primitives it became (the modeling hierarchy `bvh-hierarchy` uses).
+    fn node(&mut self, node: &Node, m: Mat4, instance: u32) -> SceneTree {
         match node {
-            Node::Group(children) => children.iter().for_each(|c| self.node(c, m, instance)),
+            Node::Group(children) => {
+                SceneTree::Group(children.iter().map(|c| self.node(c, m, instance)).collect())
+            }
             Node::Transform { matrix, child } => {
                 let m = m * *matrix;
                 let inv = m.inverse();
                 if !inv.is_finite() || m.determinant() == 0.0 {
-                    return; // a singular transform squashes its subtree to nothing visible
+                    // A singular transform squashes its subtree to nothing visible.
+                    return SceneTree::Group(Vec::new());
                 }
                 self.object_from_world.push(inv);
                 let instance = (self.object_from_world.len() - 1) as u32;
-                self.node(child, m, instance);
+                SceneTree::Transform {
+                    to_world: m,
+                    child: Box::new(self.node(child, m, instance)),
+                }
             }
             Node::Shape { shape, material } => {
-                let material = material.map_or(self.default_material, |i| i as u32);
-                let mut push = |shape: Shape| {
-                    self.prims.push(Primitive {
-                        shape,
-                        material,
-                        instance,
-                    })
-                };
-                let identity = m == Mat4::IDENTITY;
-                if !self.flatten && !identity {
-                    for s in object_shapes(shape) {
-                        if let Some(x) = Transformed::new(s, m) {
-                            push(Shape::Transformed(Box::new(x)));
-                        }
-                    }
-                    return;
+                let start = self.prims.len() as u32;
+                self.shape(shape, *material, m, instance);
+                SceneTree::Shape(start..self.prims.len() as u32)
+            }
+        }
+    }
+
+    /// Pushes the primitives of one shape seen through `m`.
+    fn shape(&mut self, shape: &Desc, material: Option<usize>, m: Mat4, instance: u32) {
+        let material = material.map_or(self.default_material, |i| i as u32);
+        let mut push = |shape: Shape| {
+            self.prims.push(Primitive {
+                shape,
+                material,
+                instance,
+            })
+        };
+        let identity = m == Mat4::IDENTITY;
+        if !self.flatten && !identity {
+            for s in object_shapes(shape) {
+                if let Some(x) = Transformed::new(s, m) {
+                    push(Shape::Transformed(Box::new(x)));
                 }
-                match shape {
-                    Desc::Sphere { center, radius } => {
-                        let s = Sphere {
-                            center: *center,
-                            radius: *radius,
-                        };
-                        push(bake_sphere(s, m));
-                    }
-                    Desc::Plane { normal, offset } => {
-                        if let Some(p) =
-                            Plane::new(*normal, *offset).and_then(|p| p.transformed(&m))
-                        {
-                            push(Shape::Plane(p));
-                        }
-                    }
-                    Desc::Triangle(v) => push(Shape::Triangle(bake_triangle(v, &m))),
-                    Desc::Mesh(mesh) => {
-                        let pos: Vec<Vec3> = mesh
-                            .positions
-                            .iter()
-                            .map(|&p| m.transform_point3(p))
-                            .collect();
-                        let flip = m.determinant() < 0.0;
-                        for t in &mesh.triangles {
-                            let [a, b, c] = t.map(|i| pos[i as usize]);
-                            push(Shape::Triangle(oriented(a, b, c, flip)));
-                        }
-                    }
+            }
+            return;
+        }
+        match shape {
+            Desc::Sphere { center, radius } => {
+                let s = Sphere {
+                    center: *center,
+                    radius: *radius,
+                };
+                push(bake_sphere(s, m));
+            }
+            Desc::Plane { normal, offset } => {
+                if let Some(p) = Plane::new(*normal, *offset).and_then(|p| p.transformed(&m)) {
+                    push(Shape::Plane(p));
+                }
+            }
+            Desc::Triangle(v) => push(Shape::Triangle(bake_triangle(v, &m))),
+            Desc::Mesh(mesh) => {
+                let pos: Vec<Vec3> = mesh
+                    .positions
+                    .iter()
+                    .map(|&p| m.transform_point3(p))
+                    .collect();
+                let flip = m.determinant() < 0.0;
+                for t in &mesh.triangles {
+                    let [a, b, c] = t.map(|i| pos[i as usize]);
+                    push(Shape::Triangle(oriented(a, b, c, flip)));
                 }
             }
         }
