@@ -21,6 +21,7 @@ struct Cli {
 }
 
 mod bench;
+mod deep;
 
 #[derive(Subcommand)]
 enum Command {
@@ -102,7 +103,7 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: none, grid, grid:NxNxN, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint.
+    /// Accelerator: none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
     #[arg(long, default_value = "bvh")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
@@ -245,5 +246,25 @@ fn camera_name(c: &glint::scene::Camera) -> &'static str {
     match c {
         glint::scene::Camera::Orthographic { .. } => "orthographic",
         glint::scene::Camera::Perspective { .. } => "perspective",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// `glint render --help` names every accelerator `--accel` accepts.
+    #[test]
+    fn render_help_lists_every_accelerator() {
+        let mut cmd = Cli::command();
+        let help = cmd
+            .find_subcommand_mut("render")
+            .expect("render subcommand")
+            .render_long_help()
+            .to_string();
+        for name in AccelKind::NAMES {
+            assert!(help.contains(name), "{name} is not in render --help");
+        }
     }
 }

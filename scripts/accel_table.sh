@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The measured tables of docs/acceleration.md ("Every choice side by side"), in
+# one command: every accelerator on glint's own mesh scenes plus two generated
+# scenes with deep transform hierarchies (flattened and not), then on the
+# course's meshes. Usage: scripts/accel_table.sh [extra `glint bench` args]
+# (the course folder is $GLINT_SHARED/scenes/6837, GLINT_SHARED defaulting to
+# ../shared).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+course="${GLINT_SHARED:-../shared}/scenes/6837"
+cargo build --release --bin glint
+args=(--size 128 --runs 3 --none-limit 5 "$@")
+./target/release/glint bench "${args[@]}"
+echo
+./target/release/glint bench --course "$course" "${args[@]}"
