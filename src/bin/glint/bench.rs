@@ -31,7 +31,8 @@ pub struct BenchArgs {
     pub runs: usize,
     /// Brute force is skipped when its estimated time exceeds this.
     pub none_limit_s: f64,
-    /// Only the cases whose name contains this.
+    /// Only the cases whose name contains this (or, comma-separated, any of
+    /// these).
     pub only: Option<String>,
 }
 
@@ -136,7 +137,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         }
     }
     if let Some(only) = &args.only {
-        cases.retain(|c| c.name.contains(only.as_str()));
+        cases.retain(|c| only.split(',').any(|o| c.name.contains(o)));
     }
     let integrator = Whitted {
         bounces: 5,

@@ -45,7 +45,7 @@ enum Command {
         /// Skip brute force (and extrapolate it) when it would take longer than this many seconds.
         #[arg(long, default_value_t = 60.0)]
         none_limit: f64,
-        /// Only the cases whose name contains this text.
+        /// Only the cases whose name contains this text (or any of several, comma-separated).
         #[arg(long)]
         only: Option<String>,
     },
