@@ -14,4 +14,5 @@ pub mod shape;
 pub mod stats;
 #[cfg(test)]
 pub(crate) mod testdata;
+pub mod viz;
 pub mod world;

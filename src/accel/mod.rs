@@ -37,7 +37,7 @@ pub mod nested_grid;
 pub mod octree;
 mod overlap;
 #[cfg(test)]
-mod testutil;
+pub(crate) mod testutil;
 
 pub use brute::Brute;
 pub use bvh::Bvh;

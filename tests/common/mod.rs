@@ -79,7 +79,8 @@ pub struct CmdLine {
     pub text: String,
     /// Its arguments after `raytracer`.
     pub args: Vec<String>,
-    /// Output file names the line names (colour, depth, normals).
+    /// Output file names the line names (colour, depth, normals, sample and
+    /// filter views).
     pub outputs: Vec<String>,
 }
 
@@ -92,7 +93,9 @@ pub fn command_lines(scenes: &Path, file: &str) -> Vec<CmdLine> {
             let mut outputs = Vec::new();
             for (i, a) in args.iter().enumerate() {
                 match a.as_str() {
-                    "-output" | "-normals" => outputs.push(args[i + 1].clone()),
+                    "-output" | "-normals" | "-render_samples" | "-render_filter" => {
+                        outputs.push(args[i + 1].clone())
+                    }
                     "-depth" => outputs.push(args[i + 3].clone()),
                     _ => {}
                 }

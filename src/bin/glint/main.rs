@@ -5,6 +5,7 @@ use glint::accel::AccelKind;
 use glint::format::load_scene;
 use glint::job::Job;
 use glint::material::TextureSpace;
+use glint::render::{Adaptive, Filter, Sampler, SamplerKind};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -22,6 +23,9 @@ struct Cli {
 
 mod bench;
 mod deep;
+mod raytree;
+mod structure;
+mod traverse;
 
 #[derive(Subcommand)]
 enum Command {
@@ -52,6 +56,12 @@ enum Command {
     /// Render a scene to an image.
     #[command(long_about = RENDER_HELP)]
     Render(RenderArgs),
+    /// Record every ray one pixel spawns: .json tree, .obj/.ply segments, or drawn over the image.
+    Raytree(raytree::RaytreeArgs),
+    /// Show the grid cells, octree leaves or BVH boxes an accelerator looks at for some pixels' eye rays.
+    Traverse(traverse::TraverseArgs),
+    /// Draw a BVH's or an octree's boxes at one depth (or its leaves) over the rendered image.
+    Structure(structure::StructureArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -124,6 +134,33 @@ struct RenderArgs {
     /// Also write a normals image.
     #[arg(long)]
     normals: Option<PathBuf>,
+    /// Samples (camera rays) per pixel.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    spp: u32,
+    /// Sample layout: uniform (grid of cell centres), random, jittered, sobol (Owen-scrambled; the default with --spp above 1).
+    #[arg(long)]
+    sampler: Option<SamplerKind>,
+    /// Seed of the random samplers (changes the noise, not its statistics).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma).
+    #[arg(long, default_value = "box:0.5")]
+    filter: Filter,
+    /// Whitted's adaptive supersampling: split a pixel square where its corners differ by more than this (0..1).
+    #[arg(long, value_name = "THRESHOLD")]
+    adaptive: Option<f32>,
+    /// Deepest adaptive subdivision (squares of 2^-D pixels).
+    #[arg(long, value_name = "D", default_value_t = Adaptive::DEFAULT_MAX_DEPTH, value_parser = clap::value_parser!(u32).range(0..=Adaptive::MAX_DEPTH as i64))]
+    max_depth: u32,
+    /// Write a heat map of camera rays per pixel, with a scale bar.
+    #[arg(long, value_name = "FILE")]
+    samples_image: Option<PathBuf>,
+    /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
+    #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
+    render_samples: Option<Vec<String>>,
+    /// The course's filter view: the filter's weights around the central pixel, zoomed.
+    #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
+    render_filter: Option<Vec<String>>,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -142,6 +179,9 @@ fn real_main() -> ExitCode {
     match cli.command {
         Command::Render(a) => render(a),
         Command::Info { scene } => info(scene),
+        Command::Raytree(a) => raytree::run(a),
+        Command::Traverse(a) => traverse::run(a),
+        Command::Structure(a) => structure::run(a),
         Command::Bench {
             scenes,
             course,
@@ -193,6 +233,39 @@ fn render(a: RenderArgs) -> ExitCode {
             return ExitCode::from(2);
         };
         job.depth = Some((t0, t1, PathBuf::from(&d[2])));
+    }
+    if a.spp > 1 || a.sampler.is_some() {
+        job.sampler = Some(Sampler::new(
+            a.sampler.unwrap_or(SamplerKind::Sobol),
+            a.spp,
+            a.seed,
+        ));
+    }
+    job.filter = a.filter;
+    if let Some(t) = a.adaptive {
+        if t.is_nan() || t < 0.0 {
+            eprintln!("glint: --adaptive {t}: the threshold must be at least 0");
+            return ExitCode::from(2);
+        }
+        job.adaptive = Some(Adaptive {
+            threshold: t,
+            max_depth: a.max_depth,
+        });
+    }
+    job.samples_image = a.samples_image;
+    for (what, v, slot) in [
+        ("--render-samples", a.render_samples, &mut job.samples_view),
+        ("--render-filter", a.render_filter, &mut job.filter_view),
+    ] {
+        if let Some(v) = v {
+            match v[1].parse::<u32>() {
+                Ok(z) if (1..=1000).contains(&z) => *slot = Some((PathBuf::from(&v[0]), z)),
+                _ => {
+                    eprintln!("glint: {what} expects a file and a zoom from 1 to 1000, got {v:?}");
+                    return ExitCode::from(2);
+                }
+            }
+        }
     }
     match job.run() {
         Ok(report) => {
