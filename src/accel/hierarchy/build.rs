@@ -4,7 +4,7 @@
 
 use super::{HierarchyBvh, Kind, Node, SceneTree, MAX_CHILDREN, MAX_LEAF, NO_SPACE};
 use crate::accel::overlap::{margin, padded};
-use crate::math::{Aabb, Mat4};
+use crate::math::{Aabb, Mat4, Vec3};
 use crate::primitive::Primitive;
 use crate::shape::Shape;
 
@@ -52,9 +52,9 @@ fn inner(children: Vec<Draft>, space: Option<Mat4>) -> Draft {
     }
 }
 
-/// Sorts `items` by their box centre along the longest axis of the centres
-/// and splits them in two halves (the median split).
-fn halve<T>(mut items: Vec<T>, centre: impl Fn(&T) -> crate::math::Vec3) -> (Vec<T>, Vec<T>) {
+/// Splits `items` into two halves at the median of their box centres along
+/// the longest axis of the centres (a partial sort: `select_nth`, O(n)).
+fn halve<T>(mut items: Vec<T>, centre: impl Fn(&T) -> Vec3) -> (Vec<T>, Vec<T>) {
     let spread = items
         .iter()
         .fold(Aabb::EMPTY, |b, x| b.grow(centre(x)))
@@ -66,8 +66,9 @@ fn halve<T>(mut items: Vec<T>, centre: impl Fn(&T) -> crate::math::Vec3) -> (Vec
     } else {
         2
     };
-    items.sort_by(|a, b| centre(a)[axis].total_cmp(&centre(b)[axis]));
-    let right = items.split_off(items.len() / 2);
+    let mid = items.len() / 2;
+    items.select_nth_unstable_by(mid, |a, b| centre(a)[axis].total_cmp(&centre(b)[axis]));
+    let right = items.split_off(mid);
     (items, right)
 }
 
@@ -88,6 +89,9 @@ struct Builder<'a> {
     prims: &'a [Primitive],
     /// Ids still to place (bounded, and not yet met in the tree).
     wanted: Vec<bool>,
+    /// Centre of each primitive's box (computed once: the median splits
+    /// compare them many times).
+    centres: Vec<Vec3>,
     margin: f32,
 }
 
@@ -151,7 +155,7 @@ impl Builder<'_> {
                 object_space,
             };
         }
-        let (a, b) = halve(ids, |&i| self.prims[i as usize].bounds().center());
+        let (a, b) = halve(ids, |&i| self.centres[i as usize]);
         inner(vec![self.split(a, space), self.split(b, space)], None)
     }
 }
@@ -221,6 +225,7 @@ pub(super) fn build(prims: &[Primitive], ids: &[u32], tree: &SceneTree) -> Hiera
     let mut b = Builder {
         prims,
         wanted,
+        centres: prims.iter().map(|p| p.bounds().center()).collect(),
         margin: margin(&bounds),
     };
     let root = b.convert(tree, None);

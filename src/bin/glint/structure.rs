@@ -61,7 +61,12 @@ pub fn run(a: StructureArgs) -> ExitCode {
     let boxes = match Structure::build(&world, a.accel) {
         Some(Structure::Bvh(b)) => glint::viz::structure::bvh_boxes(&b),
         Some(Structure::Octree(o)) => glint::viz::structure::octree_boxes(&o),
-        _ => return fail(2, format!("--accel {}: choose octree, octree-inner or a bvh", a.accel)),
+        _ => {
+            return fail(
+                2,
+                format!("--accel {}: choose octree, octree-inner or a bvh", a.accel),
+            )
+        }
     };
     let segments = glint::viz::structure::segments(&boxes, a.depth);
     let deepest = boxes.iter().map(|b| b.1).max().unwrap_or(0);
