@@ -20,7 +20,7 @@
 //! stopping inside a finer grid is as safe as stopping in the coarse one.
 
 use super::grid::build::{fill, resolution_with};
-use super::grid::{CellWalk, Lattice};
+use super::grid::{CellWalk, Face, Lattice};
 use super::mailbox::Mailbox;
 use super::overlap::{margin, padded};
 use super::{Aggregate, PrimHit};
@@ -105,7 +105,8 @@ impl NestedGrid {
 
     /// Calls `visit(items, t_exit)` for every leaf cell (one without a finer
     /// grid) the ray crosses within `[t0, t1]`, front to back over all
-    /// levels, until `visit` returns true; returns whether it did.
+    /// levels, until `visit` returns true; returns whether it did. `seen`
+    /// is told every cell walked, at every level (for the traversal views).
     fn walk(
         level: &Level,
         ray: &Ray,
@@ -113,10 +114,16 @@ impl NestedGrid {
         t1: f32,
         c: &mut Counters,
         visit: &mut impl FnMut(&[u32], f32, &mut Counters) -> bool,
+        seen: &mut impl FnMut(&CellVisit),
     ) -> bool {
         for cell in CellWalk::new(&level.lattice, ray, t0, t1) {
             c.nodes_visited += 1;
             let k = level.lattice.linear(cell.index);
+            seen(&CellVisit {
+                bounds: level.lattice.cell_bounds(cell.index),
+                entered: cell.entered,
+                finer: level.child[k] != 0,
+            });
             let stop = match level.child[k] {
                 0 => {
                     let items =
@@ -130,6 +137,7 @@ impl NestedGrid {
                     cell.t_exit,
                     c,
                     visit,
+                    seen,
                 ),
             };
             if stop {
@@ -138,6 +146,51 @@ impl NestedGrid {
         }
         false
     }
+
+    /// The closest hit, calling `visit` with every cell the search walks at
+    /// every level, in order: the renderer's search itself
+    /// ([`Aggregate::intersect`] passes a visitor that does nothing), which
+    /// the traversal views record.
+    pub fn intersect_visiting(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+        mut visit: impl FnMut(&CellVisit),
+    ) -> Option<PrimHit> {
+        let mut best: Option<PrimHit> = None;
+        let mut t_best = tmax;
+        let mut seen = Mailbox::new();
+        let test = &mut |items: &[u32], t_exit: f32, c: &mut Counters| {
+            for &id in items {
+                if !seen.first_visit(id) {
+                    continue;
+                }
+                c.intersection_tests += 1;
+                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
+                    t_best = t;
+                    best = Some(PrimHit { t, prim: id });
+                }
+            }
+            // Accepted only now: nothing in a later cell can be closer.
+            t_best <= t_exit
+        };
+        Self::walk(&self.top, ray, tmin, tmax, c, test, &mut visit);
+        best
+    }
+}
+
+/// One cell of a nested grid's walk, at any level.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellVisit {
+    /// The cell's box.
+    pub bounds: Aabb,
+    /// The face it was entered through (`None` where the walk started).
+    pub entered: Option<Face>,
+    /// Whether the cell holds a finer grid (walked next) rather than a list.
+    pub finer: bool,
 }
 
 struct Builder<'a> {
@@ -212,24 +265,7 @@ impl Aggregate for NestedGrid {
         tmax: f32,
         c: &mut Counters,
     ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut t_best = tmax;
-        let mut seen = Mailbox::new();
-        Self::walk(&self.top, ray, tmin, tmax, c, &mut |items, t_exit, c| {
-            for &id in items {
-                if !seen.first_visit(id) {
-                    continue;
-                }
-                c.intersection_tests += 1;
-                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
-                    t_best = t;
-                    best = Some(PrimHit { t, prim: id });
-                }
-            }
-            // Accepted only now: nothing in a later cell can be closer.
-            t_best <= t_exit
-        });
-        best
+        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
     }
 
     fn occluded(
@@ -241,7 +277,7 @@ impl Aggregate for NestedGrid {
         c: &mut Counters,
     ) -> bool {
         let mut seen = Mailbox::new();
-        Self::walk(&self.top, ray, tmin, tmax, c, &mut |items, _, c| {
+        let visit = &mut |items: &[u32], _, c: &mut Counters| {
             items.iter().any(|&id| {
                 if !seen.first_visit(id) {
                     return false;
@@ -252,7 +288,8 @@ impl Aggregate for NestedGrid {
                     .intersect(ray, tmin, tmax)
                     .is_some()
             })
-        })
+        };
+        Self::walk(&self.top, ray, tmin, tmax, c, visit, &mut |_| {})
     }
 
     fn bounds(&self) -> Aabb {

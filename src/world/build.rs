@@ -59,6 +59,7 @@ impl World {
             lights: scene.lights.clone(),
             background: scene.background.clone(),
             object_from_world: f.object_from_world,
+            scene_tree: tree,
         }
     }
 }

@@ -121,6 +121,39 @@ impl HierarchyBvh {
     pub fn depth(&self) -> usize {
         self.depth
     }
+
+    /// The closest hit, calling `visit` with every box the search tests, in
+    /// order: the renderer's search itself ([`Aggregate::intersect`] passes
+    /// a visitor that does nothing), which the traversal views record.
+    pub fn intersect_visiting(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+        mut visit: impl FnMut(&BoxVisit),
+    ) -> Option<PrimHit> {
+        traverse::closest(self, prims, ray, tmin, tmax, c, |k, entered| {
+            let n = &self.nodes[k as usize];
+            visit(&BoxVisit {
+                bounds: n.bounds,
+                entered,
+                leaf: matches!(n.kind, Kind::Leaf { .. }),
+            })
+        })
+    }
+}
+
+/// A box the hierarchy BVH's search tested.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxVisit {
+    /// The node's box.
+    pub bounds: Aabb,
+    /// Whether the ray entered it (within the current best hit).
+    pub entered: bool,
+    /// Whether it is a leaf.
+    pub leaf: bool,
 }
 
 impl Aggregate for HierarchyBvh {
@@ -132,7 +165,7 @@ impl Aggregate for HierarchyBvh {
         tmax: f32,
         c: &mut Counters,
     ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c)
+        traverse::closest(self, prims, ray, tmin, tmax, c, |_, _| {})
     }
 
     fn occluded(

@@ -38,7 +38,8 @@ thread_local! {
 /// Visits, nearest entry first, the leaves whose boxes the ray enters within
 /// `[tmin, *t_limit]`. `leaf(ids, ray, object_space, t_limit, c)` tests a
 /// leaf with the ray in the leaf's space, may lower `*t_limit`, and returns
-/// true to stop.
+/// true to stop. `seen(node, entered)` is told every box tested (for the
+/// traversal views).
 fn walk(
     h: &HierarchyBvh,
     ray: &Ray,
@@ -46,13 +47,16 @@ fn walk(
     t_limit: &mut f32,
     c: &mut Counters,
     mut leaf: impl FnMut(&[u32], &Ray, bool, &mut f32, &mut Counters) -> bool,
+    mut seen: impl FnMut(u32, bool),
 ) {
     let Some(root) = h.nodes.first() else {
         return;
     };
     let inv = ray.dir.recip();
     c.nodes_visited += 1;
-    let Some((t0, _)) = root.bounds.hit(ray, inv, tmin, *t_limit) else {
+    let root_hit = root.bounds.hit(ray, inv, tmin, *t_limit);
+    seen(0, root_hit.is_some());
+    let Some((t0, _)) = root_hit else {
         return;
     };
     SCRATCH.with_borrow_mut(|s| {
@@ -103,9 +107,9 @@ fn walk(
                     let mut n = 0;
                     for k in first..first + count {
                         c.nodes_visited += 1;
-                        if let Some((t0, _)) =
-                            h.nodes[k as usize].bounds.hit(ray, inv, tmin, *t_limit)
-                        {
+                        let hit = h.nodes[k as usize].bounds.hit(ray, inv, tmin, *t_limit);
+                        seen(k, hit.is_some());
+                        if let Some((t0, _)) = hit {
                             hits[n] = (t0, k);
                             n += 1;
                         }
@@ -129,7 +133,8 @@ fn tested(shape: &Shape, object_space: bool) -> &Shape {
     }
 }
 
-/// Closest hit with `tmin < t < tmax`.
+/// Closest hit with `tmin < t < tmax`; `seen(node, entered)` for every box
+/// tested.
 pub(super) fn closest(
     h: &HierarchyBvh,
     prims: &[Primitive],
@@ -137,19 +142,29 @@ pub(super) fn closest(
     tmin: f32,
     tmax: f32,
     c: &mut Counters,
+    seen: impl FnMut(u32, bool),
 ) -> Option<PrimHit> {
     let mut best = None;
     let mut t_best = tmax;
-    walk(h, ray, tmin, &mut t_best, c, |ids, r, obj, t_best, c| {
-        for &id in ids {
-            c.intersection_tests += 1;
-            if let Some(t) = tested(&prims[id as usize].shape, obj).intersect(r, tmin, *t_best) {
-                *t_best = t;
-                best = Some(PrimHit { t, prim: id });
+    walk(
+        h,
+        ray,
+        tmin,
+        &mut t_best,
+        c,
+        |ids, r, obj, t_best, c| {
+            for &id in ids {
+                c.intersection_tests += 1;
+                if let Some(t) = tested(&prims[id as usize].shape, obj).intersect(r, tmin, *t_best)
+                {
+                    *t_best = t;
+                    best = Some(PrimHit { t, prim: id });
+                }
             }
-        }
-        false
-    });
+            false
+        },
+        seen,
+    );
     best
 }
 
@@ -164,14 +179,22 @@ pub(super) fn any(
 ) -> bool {
     let mut hit = false;
     let mut t_limit = tmax;
-    walk(h, ray, tmin, &mut t_limit, c, |ids, r, obj, t_limit, c| {
-        hit = ids.iter().any(|&id| {
-            c.intersection_tests += 1;
-            tested(&prims[id as usize].shape, obj)
-                .intersect(r, tmin, *t_limit)
-                .is_some()
-        });
-        hit
-    });
+    walk(
+        h,
+        ray,
+        tmin,
+        &mut t_limit,
+        c,
+        |ids, r, obj, t_limit, c| {
+            hit = ids.iter().any(|&id| {
+                c.intersection_tests += 1;
+                tested(&prims[id as usize].shape, obj)
+                    .intersect(r, tmin, *t_limit)
+                    .is_some()
+            });
+            hit
+        },
+        |_, _| {},
+    );
     hit
 }
