@@ -55,7 +55,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-accel",
         "NAME",
-        "none, grid, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint",
+        "none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
     ),
     (
         "-no_flatten",
@@ -280,7 +280,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 grid = Some(res);
             }
             "-accel" => {
-                let name = value("none|grid|octree|bvh|bvh-median|bvh-midpoint")?;
+                let name = value("an accelerator name (see -help)")?;
                 accel = Some(
                     name.parse::<AccelKind>()
                         .map_err(|e| format!("-accel: {e}"))?,
@@ -477,6 +477,19 @@ mod tests {
             );
         }
         assert!(accepted.len() >= 20, "{accepted:?}");
+    }
+
+    /// `-help` names every accelerator `-accel` accepts.
+    #[test]
+    fn help_lists_every_accelerator() {
+        let text = help();
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("-accel"))
+            .unwrap();
+        for name in AccelKind::NAMES {
+            assert!(line.contains(name), "{name} is not in -help's -accel line");
+        }
     }
 
     #[test]

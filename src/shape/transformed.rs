@@ -2,7 +2,7 @@ use super::Shape;
 #[cfg(test)]
 use super::Sphere;
 use crate::math::float::{abs_linear, transform_error, transform_point_with_error};
-use crate::math::{gamma, Aabb, Mat4, Ray, SurfacePoint};
+use crate::math::{gamma, Aabb, Mat4, Ray, SurfacePoint, Vec3};
 use glam::DMat4;
 
 /// A shape seen through an affine matrix: used where baking into world space
@@ -78,13 +78,36 @@ impl Transformed {
         }
     }
 
-    /// The box of the object box's 8 transformed corners.
+    /// World bounds, as tight as the shape allows: a triangle by its three
+    /// transformed vertices (a rotated triangle's box is smaller than its
+    /// rotated box), a sphere by the exact box of the ellipsoid it becomes;
+    /// anything else by its object box's 8 transformed corners.
     pub fn bounds(&self) -> Aabb {
-        let b = self.shape.bounds();
-        if b.is_finite() {
-            b.transformed(&self.to_world)
-        } else {
-            b // an unbounded shape stays unbounded (and 0·inf would give NaN)
+        match &self.shape {
+            Shape::Triangle(t) => {
+                Aabb::from_points(t.vertices().map(|p| self.to_world.transform_point3(p)))
+            }
+            Shape::Sphere(s) => {
+                // Along axis i the ellipsoid reaches r·|row i| of the linear
+                // part from its centre (the support function of a sphere
+                // under a linear map).
+                let m = &self.to_world;
+                let half = Vec3::new(
+                    m.row(0).truncate().length(),
+                    m.row(1).truncate().length(),
+                    m.row(2).truncate().length(),
+                ) * s.radius.abs();
+                let c = m.transform_point3(s.center);
+                Aabb::new(c - half, c + half)
+            }
+            other => {
+                let b = other.bounds();
+                if b.is_finite() {
+                    b.transformed(&self.to_world)
+                } else {
+                    b // an unbounded shape stays unbounded (and 0·inf would give NaN)
+                }
+            }
         }
     }
 }
@@ -126,6 +149,44 @@ mod tests {
         let r = Ray::new(Vec3::ZERO, Vec3::NEG_Z);
         let t = x.intersect(&r, 0.0, f32::INFINITY).unwrap();
         assert!((t - 4.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn triangle_box_uses_its_vertices() {
+        let t = super::super::Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y);
+        let m = Mat4::from_rotation_z(std::f32::consts::FRAC_PI_4);
+        let x = Transformed::new(Shape::Triangle(t), m).unwrap();
+        let corners = t.bounds().transformed(&m);
+        let b = x.bounds();
+        assert!(b.surface_area() < corners.surface_area());
+        assert!((b.max.y - 2f32.sqrt() / 2.0).abs() < 1e-6);
+        assert!((b.min.x + 2f32.sqrt() / 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn sphere_box_is_the_ellipsoid_box() {
+        let s = Sphere {
+            center: Vec3::X,
+            radius: 2.0,
+        };
+        let m = Mat4::from_rotation_z(std::f32::consts::FRAC_PI_4)
+            * Mat4::from_scale(Vec3::new(3.0, 1.0, 1.0));
+        let x = Transformed::new(Shape::Sphere(s), m).unwrap();
+        let b = x.bounds();
+        // x = (3u cos45 - v sin45), over the ellipse 3u, v of radius 2: 2·√(4.5 + 0.5).
+        let c = m.transform_point3(Vec3::X);
+        assert!((b.max.x - c.x - 2.0 * 5f32.sqrt()).abs() < 1e-5);
+        assert!((b.max.z - c.z - 2.0).abs() < 1e-6);
+        assert!(b.surface_area() < s.bounds().transformed(&m).surface_area());
+        // Rays along the axes just inside the box hit, just outside miss.
+        for k in 0..64 {
+            let dir = Vec3::new((k as f32 * 0.1).cos(), (k as f32 * 0.1).sin(), 0.3);
+            let far = c + dir.normalize() * 20.0;
+            if let Some(t) = x.intersect(&Ray::new(far, c - far), 0.0, f32::INFINITY) {
+                let p = far + t * (c - far);
+                assert!(p.cmpge(b.min - 1e-4).all() && p.cmple(b.max + 1e-4).all());
+            }
+        }
     }
 
     #[test]

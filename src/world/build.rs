@@ -14,7 +14,9 @@
 //! the ulp of `10⁵` (0.008) first.
 
 use super::{Primitive, World};
-use crate::accel::{AccelKind, Aggregate, Brute, Bvh, Grid, Octree};
+use crate::accel::{
+    AccelKind, Aggregate, Brute, Bvh, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree, Storage,
+};
 use crate::math::Vec3;
 use crate::scene::{Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
 use crate::shape::{Plane, Shape, Sphere, Transformed, Triangle};
@@ -72,11 +74,11 @@ impl World {
             default_material,
             flatten: opts.flatten,
         };
-        f.node(&scene.root, render_from_world, 0);
+        let tree = f.node(&scene.root, render_from_world, 0);
         let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
             (0..f.prims.len() as u32).partition(|&i| f.prims[i as usize].bounds().is_finite());
         let start = Instant::now();
-        let accel = build_aggregate(opts.accel, &f.prims, bounded);
+        let accel = build_aggregate(opts.accel, &f.prims, bounded, &tree);
         World {
             build_ms: start.elapsed().as_secs_f64() * 1e3,
             prims: f.prims,
@@ -93,6 +95,7 @@ impl World {
             origin,
             background: scene.background.clone(),
             object_from_world: f.object_from_world,
+            scene_tree: tree,
         }
     }
 }
@@ -147,12 +150,23 @@ fn to_render_space(m: &Material, origin: DVec3) -> Material {
     }
 }
 
-fn build_aggregate(kind: AccelKind, prims: &[Primitive], ids: Vec<u32>) -> Box<dyn Aggregate> {
+/// `tree` is the scene's hierarchy over the primitives, for `bvh-hierarchy`.
+fn build_aggregate(
+    kind: AccelKind,
+    prims: &[Primitive],
+    ids: Vec<u32>,
+    tree: &SceneTree,
+) -> Box<dyn Aggregate> {
     match kind {
         AccelKind::None => Box::new(Brute::new(prims, ids)),
         AccelKind::Grid { res } => Box::new(Grid::new(prims, ids, res)),
         AccelKind::Octree => Box::new(Octree::new(prims, ids)),
         AccelKind::Bvh(split) => Box::new(Bvh::new(prims, ids, split)),
+        AccelKind::OctreeInner => Box::new(Octree::with_storage(prims, ids, Storage::Inner)),
+        AccelKind::NestedGrid { threshold, depth } => {
+            Box::new(NestedGrid::new(prims, ids, threshold, depth))
+        }
+        AccelKind::BvhHierarchy => Box::new(HierarchyBvh::new(prims, ids, tree)),
     }
 }
 
@@ -164,64 +178,78 @@ struct Flattener {
 }
 
 impl Flattener {
-    /// `m` maps the node's space into rendering space.
-    fn node(&mut self, node: &Node, m: DMat4, instance: u32) {
+    /// Flattens `node`, whose space `m` maps into rendering space, and
+    /// returns its tree over the primitives it became (the modeling
+    /// hierarchy `bvh-hierarchy` uses).
+    fn node(&mut self, node: &Node, m: DMat4, instance: u32) -> SceneTree {
         match node {
-            Node::Group(children) => children.iter().for_each(|c| self.node(c, m, instance)),
+            Node::Group(children) => {
+                SceneTree::Group(children.iter().map(|c| self.node(c, m, instance)).collect())
+            }
             Node::Transform { matrix, child } => {
                 let m = m * matrix.as_dmat4();
                 let inv = m.inverse();
                 if !inv.is_finite() || m.determinant() == 0.0 {
-                    return; // a singular transform squashes its subtree to nothing visible
+                    // A singular transform squashes its subtree to nothing visible.
+                    return SceneTree::Group(Vec::new());
                 }
                 self.object_from_world.push(inv.as_mat4());
                 let instance = (self.object_from_world.len() - 1) as u32;
-                self.node(child, m, instance);
+                SceneTree::Transform {
+                    to_world: m.as_mat4(),
+                    child: Box::new(self.node(child, m, instance)),
+                }
             }
             Node::Shape { shape, material } => {
-                let material = material.map_or(self.default_material, |i| i as u32);
-                let mut push = |shape: Shape| {
-                    self.prims.push(Primitive {
-                        shape,
-                        material,
-                        instance,
-                    })
-                };
-                // Instance 0: under no scene transform, only the
-                // rendering-space translation, which is always baked.
-                if !self.flatten && instance != 0 {
-                    for s in object_shapes(shape) {
-                        if let Some(x) = Transformed::from_f64(s, m) {
-                            push(Shape::Transformed(Box::new(x)));
-                        }
-                    }
-                    return;
+                let start = self.prims.len() as u32;
+                self.shape(shape, *material, m, instance);
+                SceneTree::Shape(start..self.prims.len() as u32)
+            }
+        }
+    }
+
+    /// Pushes the primitives of one shape whose space `m` maps into
+    /// rendering space.
+    fn shape(&mut self, shape: &Desc, material: Option<usize>, m: DMat4, instance: u32) {
+        let material = material.map_or(self.default_material, |i| i as u32);
+        let mut push = |shape: Shape| {
+            self.prims.push(Primitive {
+                shape,
+                material,
+                instance,
+            })
+        };
+        // Instance 0: under no scene transform, only the rendering-space
+        // translation, which is always baked.
+        if !self.flatten && instance != 0 {
+            for s in object_shapes(shape) {
+                if let Some(x) = Transformed::from_f64(s, m) {
+                    push(Shape::Transformed(Box::new(x)));
                 }
-                let point = |p: Vec3| m.transform_point3(p.as_dvec3()).as_vec3();
-                match shape {
-                    Desc::Sphere { center, radius } => {
-                        let s = Sphere {
-                            center: *center,
-                            radius: *radius,
-                        };
-                        push(bake_sphere(s, m));
-                    }
-                    Desc::Plane { normal, offset } => {
-                        if let Some(p) =
-                            Plane::new(*normal, *offset).and_then(|p| p.transformed(&m))
-                        {
-                            push(Shape::Plane(p));
-                        }
-                    }
-                    Desc::Triangle(v) => push(Shape::Triangle(bake_triangle(v, &m))),
-                    Desc::Mesh(mesh) => {
-                        let pos: Vec<Vec3> = mesh.positions.iter().map(|&p| point(p)).collect();
-                        let flip = m.determinant() < 0.0;
-                        for t in &mesh.triangles {
-                            let [a, b, c] = t.map(|i| pos[i as usize]);
-                            push(Shape::Triangle(oriented(a, b, c, flip)));
-                        }
-                    }
+            }
+            return;
+        }
+        let point = |p: Vec3| m.transform_point3(p.as_dvec3()).as_vec3();
+        match shape {
+            Desc::Sphere { center, radius } => {
+                let s = Sphere {
+                    center: *center,
+                    radius: *radius,
+                };
+                push(bake_sphere(s, m));
+            }
+            Desc::Plane { normal, offset } => {
+                if let Some(p) = Plane::new(*normal, *offset).and_then(|p| p.transformed(&m)) {
+                    push(Shape::Plane(p));
+                }
+            }
+            Desc::Triangle(v) => push(Shape::Triangle(bake_triangle(v, &m))),
+            Desc::Mesh(mesh) => {
+                let pos: Vec<Vec3> = mesh.positions.iter().map(|&p| point(p)).collect();
+                let flip = m.determinant() < 0.0;
+                for t in &mesh.triangles {
+                    let [a, b, c] = t.map(|i| pos[i as usize]);
+                    push(Shape::Triangle(oriented(a, b, c, flip)));
                 }
             }
         }

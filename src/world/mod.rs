@@ -93,6 +93,9 @@ pub struct World {
     pub object_from_world: Vec<Mat4>,
     /// Milliseconds spent building the aggregate.
     pub build_ms: f64,
+    /// The scene's object tree over `prims` (groups, transforms, shapes), as
+    /// flattening met it: what `bvh-hierarchy` is built from.
+    pub scene_tree: crate::accel::SceneTree,
 }
 
 impl World {

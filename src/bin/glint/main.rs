@@ -24,6 +24,7 @@ struct Cli {
 
 mod bench;
 mod bench_loop;
+mod deep;
 mod merge;
 mod raytree;
 mod structure;
@@ -51,7 +52,7 @@ enum Command {
         /// Skip brute force (and extrapolate it) when it would take longer than this many seconds.
         #[arg(long, default_value_t = 60.0)]
         none_limit: f64,
-        /// Only the cases whose name contains this text.
+        /// Only the cases whose name contains this text (or any of several, comma-separated).
         #[arg(long)]
         only: Option<String>,
     },
@@ -128,7 +129,7 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: none, grid, grid:NxNxN, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint.
+    /// Accelerator: none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
     #[arg(long, default_value = "bvh")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
@@ -441,5 +442,25 @@ fn camera_name(c: &glint::scene::Camera) -> &'static str {
     match c {
         glint::scene::Camera::Orthographic { .. } => "orthographic",
         glint::scene::Camera::Perspective { .. } => "perspective",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// `glint render --help` names every accelerator `--accel` accepts.
+    #[test]
+    fn render_help_lists_every_accelerator() {
+        let mut cmd = Cli::command();
+        let help = cmd
+            .find_subcommand_mut("render")
+            .expect("render subcommand")
+            .render_long_help()
+            .to_string();
+        for name in AccelKind::NAMES {
+            assert!(help.contains(name), "{name} is not in render --help");
+        }
     }
 }

@@ -16,7 +16,7 @@ use std::process::ExitCode;
 pub struct StructureArgs {
     /// Scene file (MIT 6.837 format) or a bare .obj mesh.
     scene: PathBuf,
-    /// Accelerator: octree, bvh, bvh-median, bvh-midpoint.
+    /// Accelerator: octree, octree-inner, bvh, bvh-median, bvh-midpoint.
     #[arg(long, default_value = "bvh")]
     accel: AccelKind,
     /// Draw the nodes at this depth (the root is 0); default: every leaf.
@@ -62,7 +62,12 @@ pub fn run(a: StructureArgs) -> ExitCode {
     let boxes = match Structure::build(&world, a.accel) {
         Some(Structure::Bvh(b)) => glint::viz::structure::bvh_boxes(&b),
         Some(Structure::Octree(o)) => glint::viz::structure::octree_boxes(&o),
-        _ => return fail(2, format!("--accel {}: choose octree or a bvh", a.accel)),
+        _ => {
+            return fail(
+                2,
+                format!("--accel {}: choose octree, octree-inner or a bvh", a.accel),
+            )
+        }
     };
     let segments = glint::viz::structure::segments(&boxes, a.depth);
     let deepest = boxes.iter().map(|b| b.1).max().unwrap_or(0);

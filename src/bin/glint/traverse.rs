@@ -78,7 +78,10 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
     let camera = CameraModel::new(&world.camera);
     let structure = Structure::build(&world, a.accel).ok_or((
         2,
-        "--accel none walks no structure: choose grid, octree or a bvh".to_string(),
+        format!(
+            "--accel {}: no walk to record; choose grid, octree, octree-inner or a bvh",
+            a.accel
+        ),
     ))?;
     let bvh = matches!(structure, Structure::Bvh(_));
     let mut segments = Vec::new();
