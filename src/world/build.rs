@@ -197,6 +197,7 @@ impl Flattener {
                 let instance = (self.object_from_world.len() - 1) as u32;
                 SceneTree::Transform {
                     to_world: m.as_mat4(),
+                    to_object: inv.as_mat4(),
                     child: Box::new(self.node(child, m, instance)),
                 }
             }
