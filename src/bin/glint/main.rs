@@ -173,6 +173,7 @@ struct RenderArgs {
     samples_image: Option<PathBuf>,
     /// Also write per-pixel cost: intersection tests (left) and nodes or cells visited (right), as heat maps with scale bars and totals.
     #[arg(long, value_name = "FILE")]
+    cost_image: Option<PathBuf>,
     /// Render only piece I of N (0-based horizontal bands of the frame) and write it as an EXR with that data window, for `glint merge`.
     #[arg(long, value_name = "I/N", conflicts_with_all = ["tile_from_env", "crop"])]
     tile: Option<String>,
@@ -182,7 +183,6 @@ struct RenderArgs {
     /// Render only the pixels X0..X1 x Y0..Y1 (half-open; x right, y down from the top) as an EXR piece.
     #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"])]
     crop: Option<Vec<u32>>,
-    cost_image: Option<PathBuf>,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_samples: Option<Vec<String>>,
