@@ -8,6 +8,7 @@ pub mod material;
 pub mod math;
 pub mod output;
 pub mod primitive;
+pub mod query;
 pub mod render;
 pub mod scene;
 pub mod shape;

@@ -547,6 +547,17 @@ fn bvh_sah() {
 }
 
 #[test]
+fn bvh4() {
+    let (a, b) = check(AccelKind::Bvh4, true);
+    assert!(a.intersection_tests < b.intersection_tests);
+}
+
+#[test]
+fn bvh4_unflattened() {
+    check(AccelKind::Bvh4, false);
+}
+
+#[test]
 fn bvh_median() {
     check(AccelKind::Bvh(Split::Median), true);
 }
@@ -613,6 +624,7 @@ fn cost_report() {
             AccelKind::Bvh(Split::Midpoint),
             AccelKind::Bvh(Split::Median),
             AccelKind::Bvh(Split::Sah),
+            AccelKind::Bvh4,
         ];
         let mut rq = Rng::new(5);
         let probe = World::build(&sc, BuildOptions::default());

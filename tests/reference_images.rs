@@ -179,6 +179,7 @@ fn assignment6_with_every_accelerator() {
         "bvh-sah",
         "bvh-median",
         "bvh-midpoint",
+        "bvh4",
     ] {
         let lines = plain_lines("A6_cmd.txt")
             .into_iter()

@@ -1,7 +1,7 @@
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray};
-use crate::stats::Counters;
 use crate::primitive::Primitive;
+use crate::stats::Counters;
 
 /// Tests every primitive: the baseline every accelerator is measured against.
 pub struct Brute {

@@ -8,6 +8,7 @@
 //! | [`grid`]    | uniform grid, cells as offsets + flat list  | 3DDDA, an iterator of cells   |
 //! | [`octree`]  | adaptive grid, primitives in the leaves     | front-to-back, an iterator of leaves |
 //! | [`bvh`]     | binary BVH (midpoint, median or binned SAH) | stack, nearer child first     |
+//! | [`bvh4`]    | 4-wide BVH, 4-triangle leaf blocks (default) | 4 boxes per step, nearest first |
 //!
 //! Three rules every accelerator follows, so that each returns *exactly* the
 //! hit brute force returns:
@@ -27,6 +28,7 @@
 
 mod brute;
 pub mod bvh;
+pub mod bvh4;
 pub mod grid;
 mod kind;
 mod mailbox;
@@ -37,13 +39,14 @@ mod testutil;
 
 pub use brute::Brute;
 pub use bvh::Bvh;
+pub use bvh4::Bvh4;
 pub use grid::Grid;
 pub use kind::{AccelKind, ParseAccelError, Split};
 pub use octree::Octree;
 
 use crate::math::{Aabb, Ray};
-use crate::stats::Counters;
 use crate::primitive::Primitive;
+use crate::stats::Counters;
 
 /// The closest hit an aggregate found: parameter and primitive index.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,9 +3,9 @@
 
 use super::{Aggregate, Brute};
 use crate::math::{Ray, Vec3};
+use crate::primitive::Primitive;
 use crate::shape::{Shape, Sphere, Triangle};
 use crate::stats::Counters;
-use crate::primitive::Primitive;
 
 /// A small deterministic generator (xorshift64*).
 pub(crate) struct Rng(u64);

@@ -89,7 +89,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 grid = Some(res);
             }
             "-accel" => {
-                let name = value("none|grid|octree|bvh|bvh-median|bvh-midpoint")?;
+                let name = value("none|grid|octree|bvh|bvh-median|bvh-midpoint|bvh4")?;
                 accel = Some(
                     name.parse::<AccelKind>()
                         .map_err(|e| format!("-accel: {e}"))?,

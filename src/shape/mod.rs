@@ -7,12 +7,12 @@
 mod plane;
 mod sphere;
 mod transformed;
-mod triangle;
+pub mod triangle;
 
 pub use plane::Plane;
 pub use sphere::Sphere;
 pub use transformed::Transformed;
-pub use triangle::Triangle;
+pub use triangle::{RayShear, Triangle};
 
 use crate::math::{Aabb, Ray, Vec3};
 

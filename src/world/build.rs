@@ -7,7 +7,7 @@
 //! sphere under non-uniform scale) keeps a [`Transformed`] wrapper.
 
 use super::{Primitive, World};
-use crate::accel::{AccelKind, Aggregate, Brute, Bvh, Grid, Octree};
+use crate::accel::{AccelKind, Aggregate, Brute, Bvh, Bvh4, Grid, Octree};
 use crate::math::{Mat4, Vec3};
 use crate::scene::{Material, Node, Phong, Scene, Shape as Desc};
 use crate::shape::{Plane, Shape, Sphere, Transformed, Triangle};
@@ -67,6 +67,7 @@ fn build_aggregate(kind: AccelKind, prims: &[Primitive], ids: Vec<u32>) -> Box<d
         AccelKind::Grid { res } => Box::new(Grid::new(prims, ids, res)),
         AccelKind::Octree => Box::new(Octree::new(prims, ids)),
         AccelKind::Bvh(split) => Box::new(Bvh::new(prims, ids, split)),
+        AccelKind::Bvh4 => Box::new(Bvh4::new(prims, ids)),
     }
 }
 

@@ -4,8 +4,8 @@
 
 mod build;
 
-pub use build::BuildOptions;
 pub use crate::primitive::Primitive;
+pub use build::BuildOptions;
 
 use crate::accel::Aggregate;
 use crate::math::{Aabb, Mat4, Ray, Vec3};

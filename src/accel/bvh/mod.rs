@@ -17,8 +17,8 @@ mod traverse;
 
 use super::{Aggregate, PrimHit, Split};
 use crate::math::{Aabb, Ray};
-use crate::stats::Counters;
 use crate::primitive::Primitive;
+use crate::stats::Counters;
 
 /// Most primitives in a leaf the builder makes by choice; only a set of
 /// primitives whose centroids coincide (which no split can separate) makes a

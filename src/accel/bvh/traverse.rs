@@ -10,8 +10,8 @@ use super::split::FORCE_MEDIAN_DEPTH;
 use super::Bvh;
 use crate::accel::PrimHit;
 use crate::math::Ray;
-use crate::stats::Counters;
 use crate::primitive::Primitive;
+use crate::stats::Counters;
 
 /// Entries of the traversal stack: one per level at most, and the builder
 /// keeps the tree within `FORCE_MEDIAN_DEPTH + 32` levels.

@@ -17,8 +17,8 @@ pub use traverse::{Cell, CellWalk, Face};
 use super::mailbox::Mailbox;
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
-use crate::stats::Counters;
 use crate::primitive::Primitive;
+use crate::stats::Counters;
 
 /// The geometry of the grid: where its cells are. Cell `i` along axis `a`
 /// spans the planes [`Lattice::plane`]`(a, i)` to `plane(a, i + 1)`; building

@@ -25,8 +25,8 @@ pub use traverse::{Leaf, LeafWalk};
 use super::mailbox::Mailbox;
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
-use crate::stats::Counters;
 use crate::primitive::Primitive;
+use crate::stats::Counters;
 
 /// A node holding at most this many primitives is not split.
 pub const LEAF_SIZE: usize = 8;

@@ -30,13 +30,14 @@ pub struct BenchArgs {
     pub only: Option<String>,
 }
 
-const ACCELS: [AccelKind; 6] = [
+const ACCELS: [AccelKind; 7] = [
     AccelKind::None,
     AccelKind::Grid { res: None },
     AccelKind::Octree,
     AccelKind::Bvh(Split::Midpoint),
     AccelKind::Bvh(Split::Median),
     AccelKind::Bvh(Split::Sah),
+    AccelKind::Bvh4,
 ];
 
 struct Row {

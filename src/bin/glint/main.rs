@@ -21,11 +21,17 @@ struct Cli {
 }
 
 mod bench;
+mod bench_rays;
 
 #[derive(Subcommand)]
 enum Command {
-    /// Time every accelerator on the course's meshes (and any OBJ given).
+    /// Time every accelerator on the course's meshes (and any OBJ given);
+    /// `glint bench rays MESH PREFIX` traces the anchors' ray files.
+    #[command(args_conflicts_with_subcommands = true)]
     Bench {
+        /// `rays`: the fast BVH on a mesh and ray files, Embree's checksums.
+        #[command(subcommand)]
+        what: Option<BenchWhat>,
         /// Folder holding the 6.837 scenes.
         #[arg(long, default_value = "../shared/scenes/6837")]
         scenes: PathBuf,
@@ -51,6 +57,24 @@ enum Command {
     Info {
         /// Scene file (MIT 6.837 format).
         scene: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+enum BenchWhat {
+    /// Build the default BVH over MESH and trace PREFIX.primary.rays,
+    /// PREFIX.incoherent.rays (closest hit) and PREFIX.shadow.rays (any hit).
+    Rays {
+        /// The mesh (OBJ).
+        mesh: PathBuf,
+        /// Ray file prefix (as written by the anchors' raygen and embree_bench).
+        prefix: String,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -85,8 +109,8 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: none, grid, grid:NxNxN, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint.
-    #[arg(long, default_value = "bvh")]
+    /// Accelerator: bvh4 (the fast default), none, grid, grid:NxNxN, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint.
+    #[arg(long, default_value = "bvh4")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
@@ -125,6 +149,28 @@ fn real_main() -> ExitCode {
         Command::Render(a) => render(a),
         Command::Info { scene } => info(scene),
         Command::Bench {
+            what:
+                Some(BenchWhat::Rays {
+                    mesh,
+                    prefix,
+                    threads,
+                    json,
+                }),
+            ..
+        } => match bench_rays::run(&bench_rays::RaysArgs {
+            mesh,
+            prefix,
+            threads,
+            json,
+        }) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("glint: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Command::Bench {
+            what: None,
             scenes,
             mesh,
             size,
