@@ -5,6 +5,7 @@
 use super::node::{is_leaf, leaf, leaf_range, Node4, Tri4, EMPTY, MAX_LEAF_ITEMS, OTHER};
 use crate::accel::overlap::margin;
 use crate::math::{Aabb, Vec3};
+use glam::Vec3A;
 use rayon::prelude::*;
 
 /// What one item of the source is.
@@ -75,8 +76,12 @@ impl Range {
 /// How to divide a range.
 #[derive(Clone, Copy, Debug)]
 enum Plan {
-    /// Items whose centroid falls below bin `pos` of `axis` go left.
-    Bin { axis: usize, pos: usize },
+    /// Items whose centroid falls below bin `pos` (of `bins`) of `axis` go left.
+    Bin {
+        axis: usize,
+        pos: usize,
+        bins: usize,
+    },
     /// Equal halves along the centroids' longest axis.
     Median { axis: usize },
 }
@@ -148,6 +153,7 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
 }
 
 /// Bounds of the boxes and of the centroids.
+#[inline(never)]
 fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     let one = |r: &[PrimRef]| {
         r.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), p| {
@@ -173,38 +179,41 @@ fn blocks(n: usize) -> f32 {
     n.div_ceil(4) as f32
 }
 
-/// Per-axis bins: item counts and box bounds.
+/// Per-axis bins: item counts and box bounds. `B` bins: small ranges use
+/// fewer, because clearing and sweeping 32 bins costs more than binning a
+/// handful of items (most nodes of a tree are small).
 #[derive(Clone)]
-struct Bins {
-    count: [[u32; BINS]; 3],
-    lo: [[Vec3; BINS]; 3],
-    hi: [[Vec3; BINS]; 3],
+struct Bins<const B: usize> {
+    count: [[u32; B]; 3],
+    lo: [[Vec3A; B]; 3],
+    hi: [[Vec3A; B]; 3],
 }
 
-impl Bins {
+impl<const B: usize> Bins<B> {
     fn new() -> Self {
         Bins {
-            count: [[0; BINS]; 3],
-            lo: [[Vec3::INFINITY; BINS]; 3],
-            hi: [[Vec3::NEG_INFINITY; BINS]; 3],
+            count: [[0; B]; 3],
+            lo: [[Vec3A::INFINITY; B]; 3],
+            hi: [[Vec3A::NEG_INFINITY; B]; 3],
         }
     }
 
     fn add(&mut self, refs: &[PrimRef], map: &BinMap) {
         for r in refs {
-            let k = map.bins(r.centroid());
+            let k = map.bins::<B>(r.centroid());
+            let (lo, hi) = (Vec3A::from(r.lo), Vec3A::from(r.hi));
             for a in 0..3 {
                 let k = k[a];
                 self.count[a][k] += 1;
-                self.lo[a][k] = self.lo[a][k].min(r.lo);
-                self.hi[a][k] = self.hi[a][k].max(r.hi);
+                self.lo[a][k] = self.lo[a][k].min(lo);
+                self.hi[a][k] = self.hi[a][k].max(hi);
             }
         }
     }
 
-    fn merge(mut self, o: Bins) -> Bins {
+    fn merge(mut self, o: Self) -> Self {
         for a in 0..3 {
-            for k in 0..BINS {
+            for k in 0..B {
                 self.count[a][k] += o.count[a][k];
                 self.lo[a][k] = self.lo[a][k].min(o.lo[a][k]);
                 self.hi[a][k] = self.hi[a][k].max(o.hi[a][k]);
@@ -214,7 +223,8 @@ impl Bins {
     }
 }
 
-/// Centroid → bin, per axis.
+/// Centroid → bin, per axis, for `B` bins (the scale assumes 1; `bins`
+/// multiplies by `B`).
 struct BinMap {
     min: Vec3,
     scale: Vec3,
@@ -223,8 +233,8 @@ struct BinMap {
 impl BinMap {
     fn new(cb: &Aabb) -> Self {
         let e = cb.extent();
-        // Just under BINS so that the largest centroid lands in the last bin.
-        let s = (BINS as f32) * (1.0 - 1e-6);
+        // Just under 1 so that the largest centroid lands in the last bin.
+        let s = 1.0 - 1e-6;
         BinMap {
             min: cb.min,
             scale: Vec3::select(e.cmpgt(Vec3::ZERO), Vec3::splat(s) / e, Vec3::ZERO),
@@ -232,15 +242,85 @@ impl BinMap {
     }
 
     #[inline]
-    fn bins(&self, c: Vec3) -> [usize; 3] {
-        let k = (c - self.min) * self.scale;
+    fn bins<const B: usize>(&self, c: Vec3) -> [usize; 3] {
+        let k = (c - self.min) * self.scale * B as f32;
         // `as usize` saturates: negatives and NaN give 0.
-        [k.x, k.y, k.z].map(|x| (x as usize).min(BINS - 1))
+        [k.x, k.y, k.z].map(|x| (x as usize).min(B - 1))
     }
 }
 
-fn area(lo: Vec3, hi: Vec3) -> f32 {
-    Aabb::new(lo, hi).surface_area()
+/// Bins for ranges of fewer than `SMALL_RANGE` items.
+const SMALL_BINS: usize = 8;
+/// See [`SMALL_BINS`].
+const SMALL_RANGE: usize = 64;
+
+/// Bins of a small range, on this thread.
+fn small_bins(items: &[PrimRef], cb: &Aabb) -> Bins<SMALL_BINS> {
+    let mut b = Bins::new();
+    b.add(items, &BinMap::new(cb));
+    b
+}
+
+/// Bins of a large range, in parallel when it is very large.
+fn large_bins(items: &[PrimRef], cb: &Aabb) -> Bins<BINS> {
+    let map = BinMap::new(cb);
+    if items.len() >= PARALLEL_BINNING {
+        items
+            .par_chunks(16 * 1024)
+            .fold(Bins::new, |mut b, c| {
+                b.add(c, &map);
+                b
+            })
+            .reduce(Bins::new, Bins::merge)
+    } else {
+        let mut b = Bins::new();
+        b.add(items, &map);
+        b
+    }
+}
+
+/// The cheapest plane: `(cost, axis, first bin on the right)`; the cost is
+/// the children's `area × blocks` (infinite when no plane separates items).
+fn sweep<const B: usize>(bins: &Bins<B>, n: usize, ce: Vec3) -> (f32, usize, usize) {
+    let mut best = (f32::INFINITY, 0, 0);
+    for a in 0..3 {
+        if ce[a] <= 0.0 {
+            continue;
+        }
+        // Right-to-left: cost of the right side of each plane.
+        let mut right = [0f32; B];
+        let (mut lo, mut hi, mut c) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0usize);
+        for k in (1..B).rev() {
+            lo = lo.min(bins.lo[a][k]);
+            hi = hi.max(bins.hi[a][k]);
+            c += bins.count[a][k] as usize;
+            right[k] = if c == 0 {
+                f32::INFINITY
+            } else {
+                area(lo, hi) * blocks(c)
+            };
+        }
+        let (mut lo, mut hi, mut c) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0usize);
+        #[allow(clippy::needless_range_loop)] // k indexes bins and `right` alike
+        for k in 1..B {
+            lo = lo.min(bins.lo[a][k - 1]);
+            hi = hi.max(bins.hi[a][k - 1]);
+            c += bins.count[a][k - 1] as usize;
+            if c == 0 || c == n {
+                continue;
+            }
+            let cost = area(lo, hi) * blocks(c) + right[k];
+            if cost < best.0 {
+                best = (cost, a, k);
+            }
+        }
+    }
+    best
+}
+
+fn area(lo: Vec3A, hi: Vec3A) -> f32 {
+    let e = (hi - lo).max(Vec3A::ZERO);
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
 struct Builder {
@@ -251,6 +331,7 @@ impl Builder {
     /// How to divide `r`, or `None` for a leaf.
     /// `items` are the range's references; `depth` is the 4-wide level the
     /// range's node would sit at.
+    #[inline(never)]
     fn plan(&self, items: &[PrimRef], r: &Range, depth: usize) -> Option<Plan> {
         let n = r.len();
         if n <= 4 {
@@ -275,53 +356,11 @@ impl Builder {
         if depth + levels_left >= MAX_DEPTH {
             return Some(Plan::Median { axis });
         }
-        let map = BinMap::new(&r.cbounds);
-        let bins = if n >= PARALLEL_BINNING {
-            items
-                .par_chunks(16 * 1024)
-                .fold(Bins::new, |mut b, c| {
-                    b.add(c, &map);
-                    b
-                })
-                .reduce(Bins::new, Bins::merge)
+        let best = if n < SMALL_RANGE {
+            sweep(&small_bins(items, &r.cbounds), n, ce)
         } else {
-            let mut b = Bins::new();
-            b.add(items, &map);
-            b
+            sweep(&large_bins(items, &r.cbounds), n, ce)
         };
-        let mut best = (f32::INFINITY, 0, 0);
-        for a in 0..3 {
-            if ce[a] <= 0.0 {
-                continue;
-            }
-            // Right-to-left sweep: cost of the right side of each plane.
-            let mut right = [0f32; BINS];
-            let (mut lo, mut hi, mut c) = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize);
-            for k in (1..BINS).rev() {
-                lo = lo.min(bins.lo[a][k]);
-                hi = hi.max(bins.hi[a][k]);
-                c += bins.count[a][k] as usize;
-                right[k] = if c == 0 {
-                    f32::INFINITY
-                } else {
-                    area(lo, hi) * blocks(c)
-                };
-            }
-            let (mut lo, mut hi, mut c) = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize);
-            #[allow(clippy::needless_range_loop)] // k indexes bins and `right` alike
-            for k in 1..BINS {
-                lo = lo.min(bins.lo[a][k - 1]);
-                hi = hi.max(bins.hi[a][k - 1]);
-                c += bins.count[a][k - 1] as usize;
-                if c == 0 || c == n {
-                    continue;
-                }
-                let cost = area(lo, hi) * blocks(c) + right[k];
-                if cost < best.0 {
-                    best = (cost, a, k);
-                }
-            }
-        }
         let whole = r.bounds.surface_area();
         let split = SPLIT_COST * whole + best.0;
         if n <= MAX_LEAF_ITEMS && whole * blocks(n) <= split {
@@ -333,16 +372,22 @@ impl Builder {
         Some(Plan::Bin {
             axis: best.1,
             pos: best.2,
+            bins: if n < SMALL_RANGE { SMALL_BINS } else { BINS },
         })
     }
 
     /// Divides `r` (its items are `refs`, which starts at `r.begin`) by
     /// `plan` into two non-empty ranges with their bounds.
+    #[inline(never)]
     fn divide(&self, refs: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
         let mid = match plan {
-            Plan::Bin { axis, pos } => {
+            Plan::Bin { axis, pos, bins } => {
                 let map = BinMap::new(&r.cbounds);
-                partition(refs, |p| map.bins(p.centroid())[axis] < pos)
+                if bins == SMALL_BINS {
+                    partition(refs, |p| map.bins::<SMALL_BINS>(p.centroid())[axis] < pos)
+                } else {
+                    partition(refs, |p| map.bins::<BINS>(p.centroid())[axis] < pos)
+                }
             }
             Plan::Median { axis } => {
                 let mid = refs.len() / 2;
@@ -476,6 +521,7 @@ fn refs_of<'a>(refs: &'a mut [PrimRef], r: &Range, k: &Range) -> &'a mut [PrimRe
 }
 
 /// In-place partition: items for which `left` holds first. Returns their count.
+#[inline(never)]
 fn partition(v: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> usize {
     let (mut i, mut j) = (0, v.len());
     loop {
@@ -496,6 +542,7 @@ fn partition(v: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> usize {
 
 /// Turns the leaves' item ranges into ranges of [`Tri4`] blocks and fills
 /// the blocks (leaves in item order, so each leaf's blocks are contiguous).
+#[inline(never)]
 fn fill_leaves<S: Source>(nodes: &mut [Node4], refs: &[PrimRef], src: &S) -> Vec<Tri4> {
     // Items per leaf, at the leaf's first item.
     let mut leaf_len = vec![0u8; refs.len()];

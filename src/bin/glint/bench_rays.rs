@@ -23,6 +23,9 @@ pub struct RaysArgs {
     pub threads: Option<usize>,
     /// Print one JSON object instead of text.
     pub json: bool,
+    /// Also count nodes visited and triangles tested per ray (an extra,
+    /// untimed pass).
+    pub stats: bool,
 }
 
 /// One ray of a ray file: origin, tmin, direction, tmax.
@@ -148,6 +151,28 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
     let (mi, i) = measure(&scene, &incoherent, false);
     let (ms, s) = measure(&scene, &shadow, true);
     let threads = rayon::current_num_threads();
+    if a.stats {
+        for (name, rays, shadow) in [
+            ("primary", &primary, false),
+            ("incoherent", &incoherent, false),
+            ("shadow", &shadow, true),
+        ] {
+            let mut c = glint::stats::Counters::default();
+            for r in rays.iter() {
+                if shadow {
+                    scene.occluded_with(&r.ray, r.tmin, r.tmax, &mut c);
+                } else {
+                    scene.intersect_with(&r.ray, r.tmin, r.tmax, &mut c);
+                }
+            }
+            let n = rays.len().max(1) as f64;
+            eprintln!(
+                "  {name:10} {:.1} nodes/ray, {:.1} triangles tested/ray",
+                c.nodes_visited as f64 / n,
+                c.intersection_tests as f64 / n
+            );
+        }
+    }
     if a.json {
         let v = serde_json::json!({
             "triangles": tris,

@@ -75,6 +75,9 @@ enum BenchWhat {
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
+        /// Also print nodes visited and triangles tested per ray (untimed pass).
+        #[arg(long)]
+        stats: bool,
     },
 }
 
@@ -155,6 +158,7 @@ fn real_main() -> ExitCode {
                     prefix,
                     threads,
                     json,
+                    stats,
                 }),
             ..
         } => match bench_rays::run(&bench_rays::RaysArgs {
@@ -162,6 +166,7 @@ fn real_main() -> ExitCode {
             prefix,
             threads,
             json,
+            stats,
         }) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
