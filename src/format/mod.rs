@@ -7,7 +7,9 @@
 
 mod diagnostic;
 mod mit6837;
+
 pub mod obj;
+mod obj_lean;
 
 pub use diagnostic::ParseError;
 

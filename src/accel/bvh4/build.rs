@@ -100,24 +100,29 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
         n < 1 << 28 && (0..n).all(|k| src.id(k) & OTHER == 0),
         "the fast BVH holds fewer than 2^28 primitives, with ids below 2^31 (got {n})"
     );
+    // An indexed map writes straight into the vector (a filtering
+    // collect would gather pieces and copy them); skipped items are
+    // dropped afterwards in place.
+    const SKIPPED: u32 = u32::MAX;
     let mut refs: Vec<PrimRef> = (0..n)
         .into_par_iter()
         .with_min_len(4096)
-        .filter_map(|k| {
+        .map(|k| {
             let id = src.id(k);
             let (b, other) = match src.item(id) {
                 Item::Triangle(v) => (Aabb::from_points(v), 0),
                 Item::Other(b) => (b, 1),
-                Item::Skip => return None,
+                Item::Skip => (Aabb::EMPTY, SKIPPED),
             };
-            Some(PrimRef {
+            PrimRef {
                 lo: b.min,
                 id,
                 hi: b.max,
                 other,
-            })
+            }
         })
         .collect();
+    refs.retain(|r| r.other != SKIPPED);
     let (bounds, cbounds) = bounds_of(&refs);
     if refs.is_empty() {
         return Built {
@@ -136,7 +141,7 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
         cbounds,
     };
     let plan = builder.plan(&refs, &all, 0);
-    let mut nodes = Vec::with_capacity(refs.len() / 6 + 1);
+    let mut nodes = Vec::with_capacity(refs.len() / 8 + 1);
     let root = builder.subtree(&mut refs, all, plan, 0, &mut nodes);
     if is_leaf(root) {
         // A tree of one leaf still starts at a node.
@@ -153,7 +158,6 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
 }
 
 /// Bounds of the boxes and of the centroids.
-#[inline(never)]
 fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     let one = |r: &[PrimRef]| {
         r.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), p| {
@@ -331,7 +335,6 @@ impl Builder {
     /// How to divide `r`, or `None` for a leaf.
     /// `items` are the range's references; `depth` is the 4-wide level the
     /// range's node would sit at.
-    #[inline(never)]
     fn plan(&self, items: &[PrimRef], r: &Range, depth: usize) -> Option<Plan> {
         let n = r.len();
         if n <= 4 {
@@ -378,32 +381,27 @@ impl Builder {
 
     /// Divides `r` (its items are `refs`, which starts at `r.begin`) by
     /// `plan` into two non-empty ranges with their bounds.
-    #[inline(never)]
     fn divide(&self, refs: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
-        let mid = match plan {
+        let (mid, (lb, lc), (rb, rc)) = match plan {
             Plan::Bin { axis, pos, bins } => {
                 let map = BinMap::new(&r.cbounds);
-                if bins == SMALL_BINS {
-                    partition(refs, |p| map.bins::<SMALL_BINS>(p.centroid())[axis] < pos)
-                } else {
-                    partition(refs, |p| map.bins::<BINS>(p.centroid())[axis] < pos)
-                }
+                let (min, scale) = (map.min[axis], map.scale[axis] * bins as f32);
+                // The same arithmetic as `BinMap::bins`, on one axis.
+                partition(refs, |p| {
+                    let c = (p.lo[axis] + p.hi[axis]) * 0.5;
+                    ((((c - min) * scale) as usize).min(bins - 1)) < pos
+                })
             }
             Plan::Median { axis } => {
                 let mid = refs.len() / 2;
                 refs.select_nth_unstable_by(mid, |a, b| {
                     a.centroid()[axis].total_cmp(&b.centroid()[axis])
                 });
-                mid
+                let (l, rt) = refs.split_at(mid);
+                (mid, bounds_of(l), bounds_of(rt))
             }
         };
         debug_assert!(mid > 0 && mid < refs.len());
-        let (l, rt) = refs.split_at(mid);
-        let ((lb, lc), (rb, rc)) = if refs.len() >= PARALLEL_BINNING {
-            rayon::join(|| bounds_of(l), || bounds_of(rt))
-        } else {
-            (bounds_of(l), bounds_of(rt))
-        };
         let m = r.begin + mid;
         (
             Range {
@@ -485,7 +483,7 @@ impl Builder {
             let subs: Vec<(u32, Vec<Node4>)> = slices
                 .into_par_iter()
                 .map(|(s, k, p)| {
-                    let mut v = Vec::new();
+                    let mut v = Vec::with_capacity(s.len() / 8 + 1);
                     let c = self.subtree(s, k, p, depth + 1, &mut v);
                     (c, v)
                 })
@@ -520,21 +518,66 @@ fn refs_of<'a>(refs: &'a mut [PrimRef], r: &Range, k: &Range) -> &'a mut [PrimRe
     &mut refs[k.begin - r.begin..k.end - r.begin]
 }
 
-/// In-place partition: items for which `left` holds first. Returns their count.
-#[inline(never)]
-fn partition(v: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> usize {
+/// Bounds and centroid bounds, accumulated item by item.
+struct Acc {
+    lo: Vec3A,
+    hi: Vec3A,
+    clo: Vec3A,
+    chi: Vec3A,
+}
+
+impl Acc {
+    fn new() -> Self {
+        Acc {
+            lo: Vec3A::INFINITY,
+            hi: Vec3A::NEG_INFINITY,
+            clo: Vec3A::INFINITY,
+            chi: Vec3A::NEG_INFINITY,
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, p: &PrimRef) {
+        let (lo, hi) = (Vec3A::from(p.lo), Vec3A::from(p.hi));
+        let c = (lo + hi) * 0.5;
+        self.lo = self.lo.min(lo);
+        self.hi = self.hi.max(hi);
+        self.clo = self.clo.min(c);
+        self.chi = self.chi.max(c);
+    }
+
+    fn boxes(&self) -> (Aabb, Aabb) {
+        (
+            Aabb::new(self.lo.into(), self.hi.into()),
+            Aabb::new(self.clo.into(), self.chi.into()),
+        )
+    }
+}
+
+/// In-place partition: items for which `left` holds first. Returns their
+/// count and both sides' bounds and centroid bounds, gathered in the same
+/// pass (a second pass over a large range costs as much as the partition).
+fn partition(
+    v: &mut [PrimRef],
+    left: impl Fn(&PrimRef) -> bool,
+) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
+    let (mut l, mut r) = (Acc::new(), Acc::new());
     let (mut i, mut j) = (0, v.len());
     loop {
         while i < j && left(&v[i]) {
+            l.add(&v[i]);
             i += 1;
         }
         while i < j && !left(&v[j - 1]) {
+            r.add(&v[j - 1]);
             j -= 1;
         }
         if i >= j {
-            return i;
+            return (i, l.boxes(), r.boxes());
         }
         v.swap(i, j - 1);
+        l.add(&v[i]);
+        r.add(&v[j - 1]);
         i += 1;
         j -= 1;
     }
@@ -542,7 +585,6 @@ fn partition(v: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> usize {
 
 /// Turns the leaves' item ranges into ranges of [`Tri4`] blocks and fills
 /// the blocks (leaves in item order, so each leaf's blocks are contiguous).
-#[inline(never)]
 fn fill_leaves<S: Source>(nodes: &mut [Node4], refs: &[PrimRef], src: &S) -> Vec<Tri4> {
     // Items per leaf, at the leaf's first item.
     let mut leaf_len = vec![0u8; refs.len()];
@@ -554,15 +596,16 @@ fn fill_leaves<S: Source>(nodes: &mut [Node4], refs: &[PrimRef], src: &S) -> Vec
             }
         }
     }
-    // Leaves in item order with their first block.
-    let mut leaves: Vec<(u32, u8)> = Vec::with_capacity(refs.len() / 3);
+    // Leaves in item order with their first block, and every block's
+    // items.
     let mut first_block = vec![0u32; refs.len()];
-    let mut nb = 0u32;
+    let mut block_items: Vec<(u32, u8)> = Vec::with_capacity(refs.len() / 3);
     for (s, &k) in leaf_len.iter().enumerate() {
         if k > 0 {
-            leaves.push((s as u32, k));
-            first_block[s] = nb;
-            nb += (k as u32).div_ceil(4);
+            first_block[s] = block_items.len() as u32;
+            for b in (0..k).step_by(4) {
+                block_items.push((s as u32 + b as u32, (k - b).min(4)));
+            }
         }
     }
     nodes.par_iter_mut().for_each(|n| {
@@ -573,14 +616,10 @@ fn fill_leaves<S: Source>(nodes: &mut [Node4], refs: &[PrimRef], src: &S) -> Vec
             }
         }
     });
-    leaves
+    block_items
         .par_iter()
         .with_min_len(1024)
-        .flat_map_iter(|&(s, k)| {
-            refs[s as usize..s as usize + k as usize]
-                .chunks(4)
-                .map(|c| block(c, src))
-        })
+        .map(|&(s, k)| block(&refs[s as usize..s as usize + k as usize], src))
         .collect()
 }
 
