@@ -65,7 +65,6 @@ pub fn obj(data: &[u8]) {
 /// integrator feature on. A hit reached by a finite ray must have a `t` and a
 /// normal that are not NaN.
 fn trace_a_few(scene: &Scene) {
-    let camera = CameraModel::new(&scene.camera);
     for flatten in [true, false] {
         let world = World::build(
             scene,
@@ -74,6 +73,7 @@ fn trace_a_few(scene: &Scene) {
                 ..BuildOptions::default()
             },
         );
+        let camera = CameraModel::new(&world.camera);
         let _ = world.bounds();
         for transparent_shadows in [false, true] {
             let integrator = Whitted {

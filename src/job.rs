@@ -1,12 +1,19 @@
 //! One render as both command lines describe it: load, build, render, write.
 //! The binaries only translate their flags into a [`Job`].
 
+use crate::accel::AccelKind;
 use crate::format::{load_scene, ParseError};
 use crate::integrator::Whitted;
-use crate::output::{write_rgb, OutputError};
-use crate::render::{render_with, CameraModel, Control, Frame, PixelOffset};
+use crate::output::{check_path, write_rgb, OutputError};
+use crate::render::views::{filter_view, heat_map, samples_view, Image};
+use crate::render::{
+    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, Settings,
+    TILE_SIZE,
+};
 use crate::scene::Scene;
 use crate::stats::Counters;
+use crate::viz::draw::Canvas;
+use crate::viz::grid::{legend, voxelize, GridView};
 use crate::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -35,8 +42,21 @@ pub struct Job {
     pub build: BuildOptions,
     /// Worker threads (all cores when `None`).
     pub threads: Option<usize>,
-    /// Where in the pixel the eye ray goes.
+    /// Where in the pixel the eye ray goes with one sample per pixel, and the
+    /// point whose nearest sample fills the depth and normal planes.
     pub pixel_offset: PixelOffset,
+    /// Many samples per pixel; `None`: one ray at `pixel_offset`.
+    pub sampler: Option<Sampler>,
+    /// Reconstruction filter.
+    pub filter: Filter,
+    /// Whitted's adaptive subdivision instead of the sampler's positions.
+    pub adaptive: Option<Adaptive>,
+    /// The course's `-render_samples FILE zoom` view.
+    pub samples_view: Option<(PathBuf, u32)>,
+    /// The course's `-render_filter FILE zoom` view.
+    pub filter_view: Option<(PathBuf, u32)>,
+    /// Heat map of camera rays per pixel, with a scale bar.
+    pub samples_image: Option<PathBuf>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -44,6 +64,10 @@ pub struct Job {
     pub progress: bool,
     /// Write the statistics as JSON here.
     pub stats_json: Option<PathBuf>,
+    /// Render the uniform grid's occupied cells instead of the scene
+    /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
+    /// the one `build.accel` asks for, if it is a grid.
+    pub visualize_grid: Option<GridView>,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -109,7 +133,11 @@ impl JobError {
     /// The process exit status for this error: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
-            JobError::Parse(_) | JobError::Usage(_) => 2,
+            // A request that names no writable image is the user's to fix;
+            // checked before any work.
+            JobError::Parse(_)
+            | JobError::Usage(_)
+            | JobError::Output(OutputError::Format { .. } | OutputError::NoDir { .. }) => 2,
             JobError::Output(_) | JobError::Internal(_) => 1,
             JobError::Interrupted(_) => 130,
         }
@@ -135,11 +163,28 @@ pub struct Report {
     pub render: Duration,
     /// Number of primitives in the world.
     pub primitives: usize,
+    /// Bounds of the world's bounded primitives (planes excluded).
+    pub bounds: crate::math::Aabb,
     /// The rendered planes.
     pub frame: Frame,
+    /// The sampling settings rendered with.
+    pub settings: Settings,
 }
 
 impl Job {
+    /// Every image file this job will write (colour, depth, normals).
+    pub fn image_paths(&self) -> impl Iterator<Item = &Path> {
+        let depth = self.depth.as_ref().map(|(_, _, p)| p.as_path());
+        self.output
+            .as_deref()
+            .into_iter()
+            .chain(depth)
+            .chain(self.normals.as_deref())
+            .chain(self.samples_view.as_ref().map(|(p, _)| p.as_path()))
+            .chain(self.filter_view.as_ref().map(|(p, _)| p.as_path()))
+            .chain(self.samples_image.as_deref())
+    }
+
     /// A job with the course's defaults (no outputs yet).
     pub fn new(input: PathBuf, width: u32, height: u32) -> Self {
         Self {
@@ -153,10 +198,30 @@ impl Job {
             build: BuildOptions::default(),
             threads: None,
             pixel_offset: PixelOffset::CENTER,
+            sampler: None,
+            filter: Filter::default(),
+            adaptive: None,
+            samples_view: None,
+            filter_view: None,
+            samples_image: None,
             cancel: None,
             progress: false,
             stats_json: None,
+            visualize_grid: None,
         }
+    }
+
+    /// The render settings this job asks for.
+    pub fn settings(&self) -> Settings {
+        let mut s = Settings::one_ray((self.width, self.height), self.pixel_offset);
+        if let Some(sampler) = self.sampler {
+            s.sampler = sampler;
+        }
+        s.filter = self.filter;
+        s.adaptive = self.adaptive;
+        s.keep_samples = self.samples_view.is_some();
+        s.tile_size = TILE_SIZE;
+        s
     }
 
     /// Loads, renders and writes every requested image.
@@ -168,46 +233,71 @@ impl Job {
             )));
         }
         check_frame_memory(self.width, self.height, available_memory())?;
+        for path in self.image_paths() {
+            check_path(path)?;
+        }
         let t_load = Instant::now();
         let scene = load_scene(&self.input)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+        let mut voxels = None;
+        let scene = match self.visualize_grid {
+            Some(view) => {
+                let res = match self.build.accel {
+                    AccelKind::Grid { res } => res,
+                    _ => None,
+                };
+                // World space: the cells become geometry of a new scene in
+                // the scene's own coordinates.
+                let v = voxelize(&World::build_world_space(&scene, self.build), res);
+                let cells = v.scene(&scene, view);
+                voxels = Some((v, view));
+                cells
+            }
+            None => scene,
+        };
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
-        let camera = CameraModel::new(&scene.camera);
+        let camera = CameraModel::new(&world.camera);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.threads.unwrap_or(0))
             .build()
             .map_err(|e| JobError::Internal(e.to_string()))?;
-        let bar = self.progress.then(|| progress_bar(self.height));
-        let tick = || {
+        let bar = self
+            .progress
+            .then(|| progress_bar(u64::from(self.width) * u64::from(self.height)));
+        let tick = |pixels: u64| {
             if let Some(b) = &bar {
-                b.inc(1);
+                b.inc(pixels);
             }
         };
         let control = Control {
             cancel: self.cancel.as_deref(),
-            on_row: Some(&tick),
+            on_progress: Some(&tick),
         };
+        let settings = self.settings();
         let start = Instant::now();
-        let (frame, counters) = pool.install(|| {
-            render_with(
-                &world,
-                &camera,
-                &self.integrator,
-                (self.width, self.height),
-                self.pixel_offset,
-                control,
-            )
-        });
+        let rendered =
+            pool.install(|| render_image(&world, &camera, &self.integrator, &settings, control));
+        let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();
         if let Some(b) = bar {
             b.finish_and_clear();
         }
+        let mut frame = frame;
+        if let Some((v, GridView::Count)) = &voxels {
+            let mut canvas =
+                Canvas::new(frame.width, frame.height, std::mem::take(&mut frame.color));
+            legend(&mut canvas, v.max_count());
+            frame.color = canvas.pixels;
+        }
         let complete = frame.is_complete();
         let (w, h) = (self.width, self.height);
         let mut written = Vec::new();
-        let mut write = |out: &PathBuf, pixels: &[crate::math::Vec3]| -> Result<(), JobError> {
+        let mut write_sized = |out: &PathBuf,
+                               (w, h): (u32, u32),
+                               pixels: &[crate::math::Vec3]|
+         -> Result<(), JobError> {
             let out = if complete {
                 out.clone()
             } else {
@@ -217,6 +307,8 @@ impl Job {
             written.push(out);
             Ok(())
         };
+        let mut write =
+            |out: &PathBuf, pixels: &[crate::math::Vec3]| write_sized(out, (w, h), pixels);
         if let Some(out) = &self.output {
             write(out, &frame.color)?;
         }
@@ -225,6 +317,17 @@ impl Job {
         }
         if let Some(out) = &self.normals {
             write(out, &frame.normals_image())?;
+        }
+        let mut write_view =
+            |out: &PathBuf, img: Image| write_sized(out, (img.width, img.height), &img.pixels);
+        if let Some((out, zoom)) = &self.samples_view {
+            write_view(out, samples_view(w, h, *zoom, &rendered.samples))?;
+        }
+        if let Some((out, zoom)) = &self.filter_view {
+            write_view(out, filter_view(&settings.filter, w, h, *zoom))?;
+        }
+        if let Some(out) = &self.samples_image {
+            write_view(out, heat_map(w, h, &frame.samples))?;
         }
         if !complete {
             return Err(JobError::Interrupted(written));
@@ -238,7 +341,9 @@ impl Job {
             world_ms,
             render: render_time,
             primitives: world.prims.len(),
+            bounds: world.bounds(),
             frame,
+            settings,
         };
         if let Some(path) = &self.stats_json {
             let text = serde_json::to_string_pretty(&report.stats())
@@ -254,10 +359,10 @@ impl Job {
     }
 }
 
-fn progress_bar(rows: u32) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(rows as u64);
+fn progress_bar(pixels: u64) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(pixels);
     if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{bar:40} {percent:>3}% rows {pos}/{len}  elapsed {elapsed}  eta {eta}",
+        "{bar:40} {percent:>3}% pixels {pos}/{len}  elapsed {elapsed}  eta {eta}",
     ) {
         bar.set_style(style);
     }
@@ -306,10 +411,20 @@ pub struct Stats {
     pub nodes_per_ray: f64,
     /// Rays per second of tracing time.
     pub rays_per_second: f64,
+    /// Pixel sampling: sampler and samples per pixel, or adaptive settings.
+    pub sampling: String,
+    /// Reconstruction filter.
+    pub filter: String,
+    /// Camera rays per pixel (samples per pixel).
+    pub samples_per_pixel: f64,
+    /// Rays of every kind per pixel.
+    pub rays_per_pixel: f64,
 }
 
-/// Bytes per pixel of a [`Frame`]: colour `Vec3`, depth `f32`, normal `Vec3`.
-pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12;
+/// Bytes per pixel of a [`Frame`] (colour `Vec3`, depth `f32`, normal
+/// `Vec3`, sample count `u32`) plus the tile films' filter sums (`Vec3` and
+/// `f32`) that exist until the merge.
+pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16;
 
 /// Memory assumed available where `/proc/meminfo` cannot be read.
 pub const FALLBACK_AVAILABLE: u64 = 16 << 30;
@@ -352,6 +467,7 @@ impl Report {
     pub fn stats(&self) -> Stats {
         let c = &self.counters;
         let rays = c.rays_total().max(1) as f64;
+        let pixels = (u64::from(self.frame.width) * u64::from(self.frame.height)).max(1) as f64;
         let secs = self.render.as_secs_f64();
         Stats {
             width: self.frame.width,
@@ -373,13 +489,20 @@ impl Report {
             tests_per_ray: c.intersection_tests as f64 / rays,
             nodes_per_ray: c.nodes_visited as f64 / rays,
             rays_per_second: rays / secs.max(1e-9),
+            sampling: describe_sampling(&self.settings),
+            filter: if self.settings.adaptive.is_some() {
+                "pixel square (adaptive)".into()
+            } else {
+                self.settings.filter.to_string()
+            },
+            samples_per_pixel: c.primary as f64 / pixels,
+            rays_per_pixel: c.rays_total() as f64 / pixels,
         }
     }
 
     /// The human-readable statistics table.
     pub fn stats_text(&self) -> String {
         let st = self.stats();
-        let pixels = (st.width as u64 * st.height as u64).max(1) as f64;
         let mut s = String::new();
         let mut line = |k: &str, v: String| s.push_str(&format!("{k:<28}{v}\n"));
         line("image", format!("{}x{}", st.width, st.height));
@@ -400,14 +523,30 @@ impl Report {
         line("rays total", st.rays_total.to_string());
         line("intersection tests", st.intersection_tests.to_string());
         line("nodes visited", st.nodes_visited.to_string());
+        line("sampling", st.sampling.clone());
+        line("filter", st.filter.clone());
         line("rays / second", format!("{:.0}", st.rays_per_second));
-        line(
-            "rays / pixel",
-            format!("{:.3}", st.rays_total as f64 / pixels),
-        );
+        line("samples / pixel", format!("{:.3}", st.samples_per_pixel));
+        line("rays / pixel", format!("{:.3}", st.rays_per_pixel));
         line("tests / ray", format!("{:.3}", st.tests_per_ray));
         line("nodes / ray", format!("{:.3}", st.nodes_per_ray));
         s
+    }
+}
+
+/// One line naming how pixels were sampled.
+fn describe_sampling(s: &Settings) -> String {
+    match s.adaptive {
+        Some(a) => format!(
+            "adaptive (threshold {}, max depth {})",
+            a.threshold, a.max_depth
+        ),
+        None => format!(
+            "{} x {} (seed {})",
+            s.sampler.kind,
+            s.sampler.spp(),
+            s.sampler.seed
+        ),
     }
 }
 
@@ -437,6 +576,76 @@ pub fn run_guarded(
     }
 }
 
+/// The course's statistics report (`raytracing_stats.C`, NOTES.md A6), for
+/// `raytracer -stats`: time, pixels, scene bounds, grid cells, rays by kind,
+/// intersections, cells traversed and the per-ray figures, which count
+/// non-shadow plus shadow rays. `glint --stats` and `--stats-json` keep the
+/// full counters.
+pub fn course_stats_text(report: &Report) -> String {
+    // The grid's resolution, from its description (`grid 10x10x7`).
+    let grid: Option<[u32; 3]> = report.accel.strip_prefix("grid ").and_then(|r| {
+        let v: Vec<u32> = r.split('x').filter_map(|n| n.trim().parse().ok()).collect();
+        <[u32; 3]>::try_from(v).ok()
+    });
+    let bounds = Some(report.bounds);
+    let st = report.stats();
+    let secs = report.render.as_secs_f64();
+    let whole = secs as u64;
+    let pixels = u64::from(st.width) * u64::from(st.height);
+    let rays = st.rays_total.max(1) as f64;
+    let non_shadow = st.rays_total - st.rays_shadow;
+    let mut s =
+        String::from("********************************************\nRAY TRACING STATISTICS\n");
+    let mut line = |k: &str, v: String| s.push_str(&format!("  {k:<27}{v}\n"));
+    line(
+        "total time",
+        format!("{}:{:02}:{:02}", whole / 3600, whole / 60 % 60, whole % 60),
+    );
+    line(
+        "num pixels",
+        format!("{pixels} ({}x{})", st.width, st.height),
+    );
+    line(
+        "scene bounds",
+        match bounds.filter(|b| !b.is_empty()) {
+            Some(b) => format!(
+                "({:.4}, {:.4}, {:.4}) -> ({:.4}, {:.4}, {:.4})",
+                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line(
+        "num grid cells",
+        match grid {
+            Some([x, y, z]) => format!(
+                "{} ({x}x{y}x{z})",
+                u64::from(x) * u64::from(y) * u64::from(z)
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line("num non-shadow rays", non_shadow.to_string());
+    line("num shadow rays", st.rays_shadow.to_string());
+    line("total intersections", st.intersection_tests.to_string());
+    line("total cells traversed", st.nodes_visited.to_string());
+    line("rays per second", format!("{:.1}", rays / secs.max(1e-9)));
+    line(
+        "rays per pixel",
+        format!("{:.3}", rays / pixels.max(1) as f64),
+    );
+    line(
+        "intersections per ray",
+        format!("{:.3}", st.intersection_tests as f64 / rays),
+    );
+    line(
+        "cells traversed per ray",
+        format!("{:.3}", st.nodes_visited as f64 / rays),
+    );
+    s.push_str("********************************************\n");
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -449,7 +658,7 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let msg = e.to_string();
         assert!(msg.contains("100000x100000"), "{msg}");
-        assert!(msg.contains("260.8 GiB"), "{msg}");
+        assert!(msg.contains("447.0 GiB"), "{msg}");
         assert!(msg.contains("12.0 GiB allowed"), "{msg}");
         // The product cannot overflow.
         assert!(check_frame_memory(u32::MAX, u32::MAX, u64::MAX).is_err());

@@ -1,5 +1,7 @@
 //! Integrators: what colour a ray brings back. [`Whitted`] is the classic ray
-//! tree; [`RayObserver`] lets a caller watch every ray it spawns.
+//! tree; [`RayObserver`] lets a caller watch every ray it spawns; the
+//! [`Integrator`] trait is what the render loop calls, so new integrators
+//! (ambient occlusion, path tracing) plug in without touching the loop.
 
 mod observer;
 pub mod optics;
@@ -7,3 +9,54 @@ mod whitted;
 
 pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
 pub use whitted::Whitted;
+
+use crate::math::{Ray, Vec3};
+use crate::render::SampleStream;
+use crate::stats::Counters;
+use crate::world::{Hit, World};
+
+/// Radiance along camera rays: the one interface between the render loop and
+/// the light transport.
+///
+/// `stream` is the camera sample's [`SampleStream`], already past the pixel
+/// position: every random decision (light point, lens, time, glossy lobe,
+/// hemisphere) takes its next dimension, so stratification reaches every
+/// effect and the image stays independent of threads and tiles.
+pub trait Integrator: Sync {
+    /// Colour seen along the camera ray `ray` (hits with `t > tmin`), and the
+    /// camera ray's hit (for the depth and normal planes).
+    fn li(
+        &self,
+        world: &World,
+        ray: &Ray,
+        tmin: f32,
+        stream: &mut SampleStream,
+        counters: &mut Counters,
+        observer: &mut impl RayObserver,
+    ) -> (Vec3, Option<Hit>);
+}
+
+impl Integrator for Whitted {
+    /// The Whitted tree is deterministic: it takes no stream dimensions.
+    #[inline]
+    fn li(
+        &self,
+        world: &World,
+        ray: &Ray,
+        tmin: f32,
+        _stream: &mut SampleStream,
+        counters: &mut Counters,
+        observer: &mut impl RayObserver,
+    ) -> (Vec3, Option<Hit>) {
+        self.trace(
+            world,
+            ray,
+            tmin,
+            RayKind::Primary,
+            0,
+            1.0,
+            counters,
+            observer,
+        )
+    }
+}

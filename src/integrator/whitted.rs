@@ -6,7 +6,8 @@ use super::optics::{reflect, refract};
 use super::{RayKind, RayObserver};
 use crate::light::incident;
 use crate::material::{eval, phong_light, TextureSpace};
-use crate::math::{offset_origin, Ray, Vec3};
+use crate::math::{Ray, SurfacePoint, Vec3, SHADOW_EPSILON};
+use crate::scene::Light;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 
@@ -96,11 +97,7 @@ impl Whitted {
         // The shading normal faces the side the ray came from.
         let n = if back { -hit.normal } else { hit.normal };
         let p = hit.point;
-        let m = eval(
-            &world.materials,
-            hit.material,
-            self.texture_point(world, hit),
-        );
+        let m = self.material_at(world, hit);
 
         let mut color = world.background.ambient * m.diffuse;
         for light in &world.lights {
@@ -112,9 +109,12 @@ impl Whitted {
             // A light exactly at the point (zero direction) has nothing in
             // between, and a zero-direction shadow ray would be meaningless.
             if self.shadows && inc.to_light != Vec3::ZERO {
-                let shadow = Ray::new(offset_origin(p, n, inc.to_light), inc.to_light);
-                color +=
-                    reflected * self.light_through(world, &shadow, inc.distance, depth, c, obs);
+                let target = match light {
+                    Light::Point { position, .. } => ShadowTarget::Point(*position),
+                    Light::Directional { .. } => ShadowTarget::Direction(inc.to_light),
+                };
+                color += reflected
+                    * self.light_through(world, hit.surface_point(), target, depth, c, obs);
             } else {
                 color += reflected;
             }
@@ -126,7 +126,7 @@ impl Whitted {
         let refl_w = weight * m.reflective.max_element();
         if refl_w > 0.0 && refl_w >= self.weight_cutoff {
             let r = reflect(d, n);
-            let child = Ray::new(offset_origin(p, n, r), r);
+            let child = hit.spawn_ray(r);
             let (rc, _) = self.trace(
                 world,
                 &child,
@@ -144,7 +144,7 @@ impl Whitted {
             // Entering or leaving is decided by the side of the geometric normal.
             let (n_i, n_t) = if back { (m.ior, 1.0) } else { (1.0, m.ior) };
             if let Some(t) = refract(d, n, n_i, n_t) {
-                let child = Ray::new(offset_origin(p, n, t), t);
+                let child = hit.spawn_ray(t);
                 let (tc, _) = self.trace(
                     world,
                     &child,
@@ -161,61 +161,80 @@ impl Whitted {
         color
     }
 
-    /// The point handed to the material: the world-space hit (the 6.837
-    /// scenes' texture matrices map world points) or, on request, the hit in
-    /// its object's space.
-    fn texture_point(&self, world: &World, hit: &Hit) -> Vec3 {
+    /// The Phong parameters at a hit. World-space lookups (the 6.837
+    /// scenes' texture matrices map world points) hand the rendering-space
+    /// hit to the world's materials, whose texture matrices have the move
+    /// back to world space folded in; object-space lookups hand the hit in
+    /// its object's space to the scene's own matrices.
+    fn material_at(&self, world: &World, hit: &Hit) -> crate::scene::Phong {
         match self.texture_space {
-            TextureSpace::World => hit.point,
-            TextureSpace::Object => {
-                world.object_from_world[hit.instance as usize].transform_point3(hit.point)
-            }
+            TextureSpace::World => eval(&world.materials, hit.material, hit.point),
+            TextureSpace::Object => eval(
+                &world.object_materials,
+                hit.material,
+                world.object_from_world[hit.instance as usize].transform_point3(hit.point),
+            ),
         }
     }
 
-    /// Fraction of a light's colour that reaches the end of `shadow` at
-    /// `distance`: 0 or 1 with opaque shadows; with transparent shadows the
-    /// product of the `transparentColor` of everything in between.
+    /// Fraction of a light's colour that reaches the surface point `from`
+    /// from `target`: 0 or 1 with opaque shadows; with transparent shadows
+    /// the product of the `transparentColor` of everything in between.
     fn light_through(
         &self,
         world: &World,
-        shadow: &Ray,
-        distance: f32,
+        from: SurfacePoint,
+        target: ShadowTarget,
         depth: u32,
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> Vec3 {
         c.shadow += 1;
         if !self.transparent_shadows {
-            let blocked = world.occluded(shadow, 0.0, distance, c);
-            obs.ray(
-                RayKind::Shadow,
-                shadow,
-                if blocked { f32::NAN } else { distance },
-                depth,
-                0.0,
-                None,
-            );
+            let (shadow, tmax) = target.ray_from(&from);
+            let blocked = world.occluded(&shadow, 0.0, tmax, c);
+            obs.shadow(&shadow, tmax, blocked, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut filter = Vec3::ONE;
-        let mut ray = *shadow;
-        let mut left = distance;
-        // Each pass steps past one occluder; the cap guards against a ray
-        // trapped between coincident surfaces.
+        let mut from = from;
+        // Each pass steps past one occluder, spawning the next segment from
+        // its hit; the cap guards against a ray trapped between coincident
+        // surfaces.
         for _ in 0..64 {
-            let Some(h) = world.intersect(&ray, 0.0, left, c) else {
-                obs.ray(RayKind::Shadow, &ray, left, depth, 0.0, None);
+            let (ray, tmax) = target.ray_from(&from);
+            let Some(h) = world.intersect(&ray, 0.0, tmax, c) else {
+                obs.ray(RayKind::Shadow, &ray, tmax, depth, 0.0, None);
                 return filter;
             };
             obs.ray(RayKind::Shadow, &ray, h.t, depth, 0.0, Some(h.normal));
-            filter *= eval(&world.materials, h.material, self.texture_point(world, &h)).transparent;
+            filter *= self.material_at(world, &h).transparent;
             if filter == Vec3::ZERO {
                 return filter;
             }
-            left -= h.t;
-            ray = Ray::new(offset_origin(h.point, h.normal, ray.dir), ray.dir);
+            from = h.surface_point();
         }
         Vec3::ZERO
+    }
+}
+
+/// Where a shadow ray goes.
+#[derive(Clone, Copy, Debug)]
+enum ShadowTarget {
+    /// A point light at this (rendering-space) position.
+    Point(Vec3),
+    /// Infinitely far along this unit direction.
+    Direction(Vec3),
+}
+
+impl ShadowTarget {
+    /// The shadow ray from `from` and the `tmax` it is traced to: a point
+    /// light's ray ends at the light (`t = 1`), kept `SHADOW_EPSILON` short
+    /// of it so a surface the light sits on does not shadow it.
+    fn ray_from(self, from: &SurfacePoint) -> (Ray, f32) {
+        match self {
+            ShadowTarget::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),
+            ShadowTarget::Direction(d) => (from.spawn_ray(d), f32::INFINITY),
+        }
     }
 }

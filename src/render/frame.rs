@@ -2,6 +2,9 @@ use super::{depth_grey, normal_rgb};
 use crate::math::Vec3;
 
 /// What a render produced per pixel, row-major with row 0 at the top.
+///
+/// Depth and normal hold the hit of the pixel's sample nearest to its
+/// reference point (the centre, or the corner for the course's command line).
 #[derive(Clone, Debug)]
 pub struct Frame {
     /// Width in pixels.
@@ -14,6 +17,10 @@ pub struct Frame {
     pub depth: Vec<f32>,
     /// Unit normal at the eye ray's hit (zero for a miss).
     pub normal: Vec<Vec3>,
+    /// Camera rays (samples) per pixel; for adaptive sampling, the distinct
+    /// lattice points the pixel's subdivision used (shared corners counted
+    /// in every pixel they touch).
+    pub samples: Vec<u32>,
     /// Per row (top first): whether it was rendered (a cancelled render
     /// leaves rows out).
     pub complete: Vec<bool>,
@@ -29,6 +36,7 @@ impl Frame {
             color: vec![Vec3::ZERO; n],
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
+            samples: vec![0; n],
             complete: vec![false; height as usize],
         }
     }

@@ -1,35 +1,55 @@
-//! The pixel loop: camera rays through every pixel, traced in parallel by rows,
-//! into a [`Frame`] of colour, depth and normal planes.
+//! The render loop: tiles over rayon, each tile's pixels sampled by a
+//! [`Sampler`], traced by an [`Integrator`] and reconstructed by a [`Filter`]
+//! on a [`film`]; or, with [`Adaptive`] settings, Whitted's corner
+//! subdivision. The loop knows nothing of any effect: everything random is a
+//! dimension of the sample stream it hands the integrator.
 
+mod adaptive;
 mod camera;
+pub mod film;
+mod filter;
 mod frame;
+pub mod legacy;
+pub mod sampler;
+pub mod views;
 
-pub use camera::{screen_point, CameraModel};
+pub use adaptive::Adaptive;
+pub use camera::{pixel_of_screen, screen_point, CameraModel};
+pub use filter::Filter;
 pub use frame::Frame;
+pub use sampler::{GridLayout, SampleStream, Sampler, SamplerKind};
 
-use crate::integrator::{NoObserver, RayKind, Whitted};
+use crate::integrator::{Integrator, NoObserver, Whitted};
 use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
 use crate::world::World;
+use film::{merge, tiles, Rect, TileFilm};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// How a caller steers a running render: stop it early, watch its progress.
 #[derive(Default, Clone, Copy)]
 pub struct Control<'a> {
-    /// When set (e.g. by a Ctrl-C handler), rows not yet started are skipped.
+    /// When set (e.g. by a Ctrl-C handler), tiles not yet started are skipped.
     pub cancel: Option<&'a AtomicBool>,
-    /// Called once per finished row, from the worker threads.
-    pub on_row: Option<&'a (dyn Fn() + Sync)>,
+    /// Called with a number of pixels each time a piece of work finishes,
+    /// from the worker threads (the calls add up to width × height).
+    pub on_progress: Option<&'a (dyn Fn(u64) + Sync)>,
 }
 
 impl Control<'_> {
     fn cancelled(&self) -> bool {
         self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
     }
+
+    fn progress(&self, pixels: u64) {
+        if let Some(f) = self.on_progress {
+            f(pixels);
+        }
+    }
 }
 
-/// Where in each pixel the single eye ray goes.
+/// Where in each pixel the single eye ray of a one-sample render goes.
 ///
 /// `(0.5, 0.5)` is the pixel centre. The 6.837 reference renders match the
 /// pixel's lower-left corner `(0, 0)` exactly (screen point `i/w`, the usual
@@ -45,82 +65,181 @@ impl PixelOffset {
     pub const CORNER: PixelOffset = PixelOffset(Vec2::ZERO);
 }
 
+/// Default tile edge: 32×32 pixels is big enough that per-tile overhead
+/// (film allocation, margins) is small and small enough for load balance on
+/// many cores.
+pub const TILE_SIZE: u32 = 32;
+
+/// Everything that decides the image (besides the scene and integrator).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Image width and height.
+    pub size: (u32, u32),
+    /// Sample layout, count and seed.
+    pub sampler: Sampler,
+    /// Reconstruction filter.
+    pub filter: Filter,
+    /// In-pixel point whose nearest sample's hit fills the depth and normal
+    /// planes (the pixel's "own" ray).
+    pub reference: Vec2,
+    /// Tile edge in pixels.
+    pub tile_size: u32,
+    /// Whitted's adaptive subdivision instead of the sampler's pixel
+    /// positions (the sampler still provides the further dimensions).
+    pub adaptive: Option<Adaptive>,
+    /// Keep every sample (position, colour) for the `-render_samples` view.
+    pub keep_samples: bool,
+}
+
+impl Settings {
+    /// One ray per pixel at `offset`, box 0.5 (the pixel itself).
+    pub fn one_ray((w, h): (u32, u32), offset: PixelOffset) -> Self {
+        Self {
+            size: (w, h),
+            sampler: Sampler::fixed(offset.0),
+            filter: Filter::default(),
+            reference: offset.0,
+            tile_size: TILE_SIZE,
+            adaptive: None,
+            keep_samples: false,
+        }
+    }
+}
+
+/// One camera sample, kept for the `-render_samples` view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleRecord {
+    /// Pixel `(i, j)`, image coordinates with `j` up.
+    pub pixel: (u32, u32),
+    /// Position inside the pixel, `[0,1)²`, `y` up.
+    pub offset: Vec2,
+    /// Colour the integrator returned.
+    pub color: Vec3,
+}
+
+/// What a render produced.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The planes.
+    pub frame: Frame,
+    /// Merged ray counters.
+    pub counters: Counters,
+    /// Every camera sample in pixel order, if [`Settings::keep_samples`].
+    pub samples: Vec<SampleRecord>,
+}
+
 /// Renders `world` seen through `camera` into a `width`×`height` frame with
 /// one ray through each pixel at `offset`. Returns the merged counters.
 pub fn render(
     world: &World,
     camera: &CameraModel,
     integrator: &Whitted,
-    (width, height): (u32, u32),
+    size: (u32, u32),
     offset: PixelOffset,
 ) -> (Frame, Counters) {
-    render_with(
+    let r = render_image(
         world,
         camera,
         integrator,
-        (width, height),
-        offset,
+        &Settings::one_ray(size, offset),
         Control::default(),
-    )
+    );
+    (r.frame, r.counters)
 }
 
-/// [`render`] under a [`Control`]. Rows skipped after a cancel stay black and
-/// are listed in [`Frame::complete`] as `false`.
-pub fn render_with(
+/// Renders with every [`Settings`] under a [`Control`]. Tiles skipped after a
+/// cancel stay black and their rows are listed in [`Frame::complete`] as
+/// `false`.
+pub fn render_image<I: Integrator>(
     world: &World,
     camera: &CameraModel,
-    integrator: &Whitted,
-    (width, height): (u32, u32),
-    offset: PixelOffset,
+    integrator: &I,
+    settings: &Settings,
     control: Control,
-) -> (Frame, Counters) {
-    let mut frame = Frame::new(width, height);
-    let w = width as usize;
-    let counters = frame
-        .color
-        .par_chunks_mut(w)
-        .zip(frame.depth.par_chunks_mut(w))
-        .zip(frame.normal.par_chunks_mut(w))
-        .zip(frame.complete.par_iter_mut())
-        .enumerate()
-        .map(|(row, (((color, depth), normal), complete))| {
-            let mut c = Counters::default();
+) -> Rendered {
+    if let Some(a) = settings.adaptive {
+        return adaptive::render(world, camera, integrator, settings, &a, control);
+    }
+    let (w, h) = settings.size;
+    let rects = tiles(w, h, settings.tile_size);
+    let done: Vec<Option<(TileFilm, Counters, Vec<SampleRecord>)>> = rects
+        .par_iter()
+        .map(|&rect| {
             if control.cancelled() {
-                return c;
+                return None;
             }
-            // Row 0 of the frame is the top of the image; screen j grows upwards.
-            let j = height - 1 - row as u32;
-            for i in 0..width {
-                let s = screen_point(i, j, offset.0, width, height);
-                let ray = camera.ray(s);
-                let (col, hit) = integrator.trace(
+            let out = render_tile(world, camera, integrator, settings, rect);
+            control.progress(rect.area() as u64);
+            Some(out)
+        })
+        .collect();
+    let mut counters = Counters::default();
+    let mut samples = Vec::new();
+    let mut films = Vec::with_capacity(done.len());
+    for d in done {
+        films.push(d.map(|(film, c, s)| {
+            counters += c;
+            samples.extend(s);
+            film
+        }));
+    }
+    let mut frame = Frame::new(w, h);
+    merge(
+        &films,
+        settings.tile_size,
+        settings.filter.support(),
+        &mut frame,
+    );
+    Rendered {
+        frame,
+        counters,
+        samples,
+    }
+}
+
+/// Traces every sample of the pixels of `rect` into a fresh tile film.
+fn render_tile<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    settings: &Settings,
+    rect: Rect,
+) -> (TileFilm, Counters, Vec<SampleRecord>) {
+    let (w, h) = settings.size;
+    let mut film = TileFilm::new(rect, settings.filter, (w, h));
+    let mut counters = Counters::default();
+    let mut kept = Vec::new();
+    let sampler = &settings.sampler;
+    for row in rect.row0..rect.row1 {
+        // Row 0 of the frame is the top of the image; screen j grows upwards.
+        let j = h - 1 - row;
+        for i in rect.x0..rect.x1 {
+            for k in 0..sampler.spp() {
+                let mut stream = sampler.stream((i, j), k);
+                let o = stream.next_2d();
+                let ray = camera.ray(screen_point(i, j, o, w, h));
+                let (c, hit) = integrator.li(
                     world,
                     &ray,
                     camera.tmin(),
-                    RayKind::Primary,
-                    0,
-                    1.0,
-                    &mut c,
+                    &mut stream,
+                    &mut counters,
                     &mut NoObserver,
                 );
-                let k = i as usize;
-                color[k] = col;
-                if let Some(h) = hit {
-                    depth[k] = h.t;
-                    normal[k] = h.normal;
+                film.splat(i, row, o, c);
+                let d2 = (o - settings.reference).length_squared();
+                film.record_hit(i, row, d2, hit.map(|h| (h.t, h.normal)));
+                if settings.keep_samples {
+                    kept.push(SampleRecord {
+                        pixel: (i, j),
+                        offset: o,
+                        color: c,
+                    });
                 }
             }
-            *complete = true;
-            if let Some(f) = control.on_row {
-                f();
-            }
-            c
-        })
-        .reduce(Counters::default, |mut a, b| {
-            a += b;
-            a
-        });
-    (frame, counters)
+        }
+    }
+    (film, counters, kept)
 }
 
 /// Grey level of the depth image: `t0` (near) is white, `t1` is black,

@@ -1,7 +1,11 @@
 use super::Shape;
 #[cfg(test)]
 use super::Sphere;
-use crate::math::{Aabb, Mat4, Ray, Vec3};
+use crate::math::float::{abs_linear, transform_error, transform_point_with_error};
+use crate::math::{gamma, Aabb, Mat4, Ray, SurfacePoint};
+use glam::DMat4;
+#[cfg(test)]
+use glam::Vec3;
 
 /// A shape seen through an affine matrix: used where baking into world space
 /// is impossible (a sphere under non-uniform scale) or switched off. Rays go
@@ -20,12 +24,21 @@ pub struct Transformed {
 impl Transformed {
     /// Wraps `shape` under `to_world`; `None` when the matrix is singular.
     pub fn new(shape: Shape, to_world: Mat4) -> Option<Self> {
+        Self::from_f64(shape, to_world.as_dmat4())
+    }
+
+    /// Wraps `shape` under `to_world` given in f64 (the inverse is taken in
+    /// f64 too, then both are rounded); `None` when the matrix is singular
+    /// or does not fit in f32.
+    pub fn from_f64(shape: Shape, to_world: DMat4) -> Option<Self> {
         let to_object = to_world.inverse();
-        (to_object.is_finite() && to_world.determinant() != 0.0).then_some(Self {
-            shape,
-            to_world,
-            to_object,
-        })
+        let (w, o) = (to_world.as_mat4(), to_object.as_mat4());
+        (to_world.determinant() != 0.0 && w.is_finite() && o.is_finite() && w.determinant() != 0.0)
+            .then_some(Self {
+                shape,
+                to_world: w,
+                to_object: o,
+            })
     }
 
     fn object_ray(&self, ray: &Ray) -> Ray {
@@ -41,14 +54,30 @@ impl Transformed {
         self.shape.intersect(&self.object_ray(ray), tmin, tmax)
     }
 
-    /// World normal at world point `p`: the object normal carried by the
-    /// inverse transpose, which keeps it perpendicular under non-uniform scale.
-    pub fn normal(&self, p: Vec3) -> Vec3 {
-        let n_obj = self.shape.normal(self.to_object.transform_point3(p));
-        self.to_object
-            .transpose()
-            .transform_vector3(n_obj)
-            .normalize_or_zero()
+    /// The hit at (world) parameter `t`: the object-space hit carried to
+    /// world space with its error (pbrt's transform of a point with error),
+    /// and the normal by the inverse transpose, which keeps it perpendicular
+    /// under non-uniform scale.
+    ///
+    /// The bound has one more term: a ray spawned from this point is carried
+    /// back into object space by `to_object`, which rounds its origin again,
+    /// by up to `γ(3)·(|M⁻¹|·|p| + |t⁻¹|)` in object space. That amount,
+    /// carried forward by `|M|`, is added, so the offset along the normal
+    /// also covers the trip back.
+    pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
+        let obj = self.shape.surface(&self.object_ray(ray), t);
+        let (p, err) = transform_point_with_error(&self.to_world, obj.p, obj.error);
+        let back =
+            (1.0 + gamma(3)) * (abs_linear(&self.to_world) * transform_error(&self.to_object, p));
+        SurfacePoint {
+            p,
+            error: err + back,
+            n: self
+                .to_object
+                .transpose()
+                .transform_vector3(obj.n)
+                .normalize_or_zero(),
+        }
     }
 
     /// The box of the object box's 8 transformed corners.
@@ -79,7 +108,7 @@ mod tests {
         let p = r.at(t);
         // On the ellipse x²/4 + y²/0.25 = 1 at x = 1: y = sqrt(0.75)/2.
         assert!((p.y - 0.75f32.sqrt() / 2.0).abs() < 1e-5);
-        let n = x.normal(p);
+        let n = x.surface(&r, t).n;
         // Gradient of x²/4 + 4y²: (x/2, 8y, 0).
         let g = Vec3::new(p.x / 2.0, 8.0 * p.y, 0.0).normalize();
         assert!((n - g).length() < 1e-5);

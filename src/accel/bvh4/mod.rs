@@ -11,8 +11,8 @@
 //!
 //! What it shares with the textbook [`Bvh`](super::Bvh): the padding rule
 //! (boxes grown by `overlap::margin`) and the triangle arithmetic
-//! (`shape::triangle::intersect_watertight`, lane for lane), which is why it
-//! returns exactly brute force's hits. Non-triangle primitives (spheres,
+//! (`shape::intersect_triangle`, the watertight test, called per lane),
+//! which is why it returns exactly brute force's hits. Non-triangle primitives (spheres,
 //! transformed shapes) sit in the same leaves and are tested one at a time.
 //!
 //! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere): no `unsafe`,
@@ -27,7 +27,7 @@ pub use traverse::{Fallback, TrianglesOnly};
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
-use crate::shape::Shape;
+use crate::shape::{Shape, Triangle};
 use crate::stats::{Counters, TraversalStats};
 use build::{Item, Source};
 pub(crate) use node::Node4;
@@ -56,7 +56,7 @@ impl Source for Prims<'_> {
     }
     fn item(&self, id: u32) -> Item {
         match &self.prims[id as usize].shape {
-            Shape::Triangle(t) if t.normal == Vec3::ZERO => Item::Skip,
+            Shape::Triangle(t) if t.is_degenerate() => Item::Skip,
             Shape::Triangle(t) => Item::Triangle(t.v),
             other => Item::Other(other.bounds()),
         }
@@ -77,11 +77,12 @@ impl<V: Copy + Into<Vec3> + Sync> Source for IndexedMesh<'_, V> {
         k as u32
     }
     fn item(&self, id: u32) -> Item {
-        let v = self.indices[id as usize].map(|i| self.vertices[i as usize].into());
-        if crate::shape::triangle::is_degenerate(v[0], v[1], v[2]) {
+        let [a, b, c] = self.indices[id as usize].map(|i| self.vertices[i as usize].into());
+        // The same degeneracy rule as the world's triangles.
+        if Triangle::new(a, b, c).is_degenerate() {
             Item::Skip
         } else {
-            Item::Triangle(v)
+            Item::Triangle([a, b, c])
         }
     }
 }

@@ -1,9 +1,9 @@
 //! Closest-hit and any-hit traversal: per-ray constants computed once, four
-//! boxes per node step, nearest child first, four triangles per leaf step.
+//! boxes per node step, nearest child first, blocks of four triangles per leaf.
 
 use super::node::{is_leaf, leaf_range, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
 use crate::math::{Ray, Vec3};
-use crate::shape::triangle::{edge_functions_f64, RayShear};
+use crate::shape::{intersect_triangle, WatertightRay};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
@@ -39,11 +39,8 @@ pub(crate) struct RayData {
     /// ray's octant).
     near: [usize; 3],
     far: [usize; 3],
-    /// The watertight test's axis permutation and shear.
-    shear: RayShear,
-    /// Origin in the permuted axes, and the shear, splatted.
-    org_k: [Vec4; 3],
-    s: [Vec4; 3],
+    /// The watertight test's per-ray permutation and shear.
+    wt: WatertightRay,
 }
 
 impl RayData {
@@ -51,18 +48,14 @@ impl RayData {
     pub fn new(ray: &Ray) -> Self {
         let o = ray.origin;
         let inv = Vec3::ONE / ray.dir;
-        let shear = RayShear::new(ray.dir);
         let neg = |a: usize| usize::from(inv[a] < 0.0 || (inv[a] == 0.0 && ray.dir[a] < 0.0));
-        let [kx, ky, kz] = shear.k;
         RayData {
             ray: *ray,
             org: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
             inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
-            org_k: [Vec4::splat(o[kx]), Vec4::splat(o[ky]), Vec4::splat(o[kz])],
-            s: shear.s.map(Vec4::splat),
-            shear,
+            wt: WatertightRay::new(ray),
         }
     }
 
@@ -88,51 +81,26 @@ impl RayData {
         (tn.cmple(tf).bitmask(), tn)
     }
 
-    /// The watertight test of `shape::triangle::intersect_watertight` on four
-    /// triangles at once, step for step the same operations, so each lane's
-    /// result is bit-identical to the scalar test. Returns the mask of lanes
-    /// hit in `(tmin, tmax)` and their parameters.
+    /// The watertight test (`shape::triangle::intersect_triangle`) on the
+    /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)` and
+    /// their parameters. Each lane calls the very function brute force calls,
+    /// so results are bit-identical; unused and non-triangle lanes (NaN
+    /// vertices) are skipped by their ids.
     #[inline(always)]
     fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, Vec4) {
-        let [kx, ky, kz] = self.shear.k;
-        let [ox, oy, oz] = self.org_k;
-        let [sx, sy, sz] = self.s;
-        let rel = |k: usize| (b.v[k][kx] - ox, b.v[k][ky] - oy, b.v[k][kz] - oz);
-        let (a_x, a_y, a_z) = rel(0);
-        let (b_x, b_y, b_z) = rel(1);
-        let (c_x, c_y, c_z) = rel(2);
-        let ax = a_x - sx * a_z;
-        let ay = a_y - sy * a_z;
-        let bx = b_x - sx * b_z;
-        let by = b_y - sy * b_z;
-        let cx = c_x - sx * c_z;
-        let cy = c_y - sy * c_z;
-        let mut u = cx * by - cy * bx;
-        let mut v = ax * cy - ay * cx;
-        let mut w = bx * ay - by * ax;
-        let zero = Vec4::ZERO;
-        let undecided = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask();
-        if undecided != 0 {
-            // A ray through an edge or vertex in single precision: the lanes
-            // concerned are decided in double precision, as the scalar test does.
-            for i in 0..4 {
-                if undecided & (1 << i) != 0 {
-                    let [eu, ev, ew] = edge_functions_f64(ax[i], ay[i], bx[i], by[i], cx[i], cy[i]);
-                    u[i] = eu;
-                    v[i] = ev;
-                    w[i] = ew;
-                }
+        let mut mask = 0;
+        let mut t = Vec4::ZERO;
+        for lane in 0..4 {
+            if b.ids[lane] & OTHER != 0 {
+                continue; // NO_ITEM has the flag too
+            }
+            let p = |k: usize| Vec3::new(b.v[k][0][lane], b.v[k][1][lane], b.v[k][2][lane]);
+            if let Some(h) = intersect_triangle(&self.wt, p(0), p(1), p(2), tmin, tmax) {
+                mask |= 1 << lane;
+                t[lane] = h.t;
             }
         }
-        let mixed = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
-            & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
-        let det = u + v + w;
-        let az = sz * a_z;
-        let bz = sz * b_z;
-        let cz = sz * c_z;
-        let t = (u * az + v * bz + w * cz) / det;
-        let ok = det.cmpne(zero) & t.cmpgt(Vec4::splat(tmin)) & t.cmplt(Vec4::splat(tmax));
-        (ok.bitmask() & !mixed.bitmask(), t)
+        (mask, t)
     }
 }
 

@@ -5,6 +5,7 @@ use glint::accel::AccelKind;
 use glint::format::load_scene;
 use glint::job::Job;
 use glint::material::TextureSpace;
+use glint::render::{Adaptive, Filter, Sampler, SamplerKind};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -22,19 +23,25 @@ struct Cli {
 
 mod bench;
 mod bench_rays;
+mod raytree;
+mod structure;
+mod traverse;
 
 #[derive(Subcommand)]
 enum Command {
-    /// Time every accelerator on the course's meshes (and any OBJ given);
+    /// Time every accelerator on glint's own example scenes (or the course's meshes, and any OBJ given);
     /// `glint bench rays MESH PREFIX` traces the anchors' ray files.
     #[command(args_conflicts_with_subcommands = true)]
     Bench {
         /// `rays`: the fast BVH on a mesh and ray files, Embree's checksums.
         #[command(subcommand)]
         what: Option<BenchWhat>,
-        /// Folder holding the 6.837 scenes.
-        #[arg(long, default_value = "../shared/scenes/6837")]
+        /// Folder of glint's own example scenes.
+        #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
+        /// Bench the course's bunnies and logo from this folder instead (e.g. ../shared/scenes/6837).
+        #[arg(long, value_name = "DIR")]
+        course: Option<PathBuf>,
         /// Extra OBJ meshes, e.g. the anchors' meshgen output (see scripts/bench.sh).
         #[arg(long)]
         mesh: Vec<PathBuf>,
@@ -52,7 +59,14 @@ enum Command {
         only: Option<String>,
     },
     /// Render a scene to an image.
+    #[command(long_about = RENDER_HELP)]
     Render(RenderArgs),
+    /// Record every ray one pixel spawns: .json tree, .obj/.ply segments, or drawn over the image.
+    Raytree(raytree::RaytreeArgs),
+    /// Show the grid cells, octree leaves or BVH boxes an accelerator looks at for some pixels' eye rays.
+    Traverse(traverse::TraverseArgs),
+    /// Draw a BVH's or an octree's boxes at one depth (or its leaves) over the rendered image.
+    Structure(structure::StructureArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -81,11 +95,24 @@ enum BenchWhat {
     },
 }
 
+const RENDER_HELP: &str = "Render a scene to an image.
+
+SCENE is a scene file in the MIT 6.837 format, or a bare Wavefront .obj mesh, which renders \
+directly: glint frames it with a camera looking at its bounding box and one light.
+
+The output format comes from the extension: .png, .tga (uncompressed 24-bit), .ppm (binary P6) \
+and .bmp are 8-bit, clamped to [0, 1]; .exr (OpenEXR) and .pfm (portable float map) keep the \
+linear 32-bit values unclamped. An unsupported extension is refused before any work (exit 2).
+
+The eye ray of each pixel goes through the pixel's centre. The `raytracer` command, which \
+runs the course's command lines verbatim, uses the pixel's lower-left corner instead, the \
+course's convention, which its reference images match exactly.";
+
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (MIT 6.837 format).
+    /// Scene file (MIT 6.837 format) or a bare .obj mesh.
     scene: PathBuf,
-    /// Output image (.png, .tga, .ppm, .bmp; .exr, .pfm for unclamped float).
+    /// Output image: .png, .tga, .ppm, .bmp (8-bit); .exr, .pfm (unclamped float).
     #[arg(short, long)]
     output: PathBuf,
     /// Image size in pixels.
@@ -133,6 +160,33 @@ struct RenderArgs {
     /// Also write a normals image.
     #[arg(long)]
     normals: Option<PathBuf>,
+    /// Samples (camera rays) per pixel.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    spp: u32,
+    /// Sample layout: uniform (grid of cell centres), random, jittered, sobol (Owen-scrambled; the default with --spp above 1).
+    #[arg(long)]
+    sampler: Option<SamplerKind>,
+    /// Seed of the random samplers (changes the noise, not its statistics).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma).
+    #[arg(long, default_value = "box:0.5")]
+    filter: Filter,
+    /// Whitted's adaptive supersampling: split a pixel square where its corners differ by more than this (0..1).
+    #[arg(long, value_name = "THRESHOLD")]
+    adaptive: Option<f32>,
+    /// Deepest adaptive subdivision (squares of 2^-D pixels).
+    #[arg(long, value_name = "D", default_value_t = Adaptive::DEFAULT_MAX_DEPTH, value_parser = clap::value_parser!(u32).range(0..=Adaptive::MAX_DEPTH as i64))]
+    max_depth: u32,
+    /// Write a heat map of camera rays per pixel, with a scale bar.
+    #[arg(long, value_name = "FILE")]
+    samples_image: Option<PathBuf>,
+    /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
+    #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
+    render_samples: Option<Vec<String>>,
+    /// The course's filter view: the filter's weights around the central pixel, zoomed.
+    #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
+    render_filter: Option<Vec<String>>,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -151,6 +205,9 @@ fn real_main() -> ExitCode {
     match cli.command {
         Command::Render(a) => render(a),
         Command::Info { scene } => info(scene),
+        Command::Raytree(a) => raytree::run(a),
+        Command::Traverse(a) => traverse::run(a),
+        Command::Structure(a) => structure::run(a),
         Command::Bench {
             what:
                 Some(BenchWhat::Rays {
@@ -177,6 +234,7 @@ fn real_main() -> ExitCode {
         Command::Bench {
             what: None,
             scenes,
+            course,
             mesh,
             size,
             runs,
@@ -184,6 +242,7 @@ fn real_main() -> ExitCode {
             only,
         } => match bench::run(&bench::BenchArgs {
             scenes,
+            course,
             meshes: mesh,
             size,
             runs,
@@ -225,6 +284,39 @@ fn render(a: RenderArgs) -> ExitCode {
         };
         job.depth = Some((t0, t1, PathBuf::from(&d[2])));
     }
+    if a.spp > 1 || a.sampler.is_some() {
+        job.sampler = Some(Sampler::new(
+            a.sampler.unwrap_or(SamplerKind::Sobol),
+            a.spp,
+            a.seed,
+        ));
+    }
+    job.filter = a.filter;
+    if let Some(t) = a.adaptive {
+        if t.is_nan() || t < 0.0 {
+            eprintln!("glint: --adaptive {t}: the threshold must be at least 0");
+            return ExitCode::from(2);
+        }
+        job.adaptive = Some(Adaptive {
+            threshold: t,
+            max_depth: a.max_depth,
+        });
+    }
+    job.samples_image = a.samples_image;
+    for (what, v, slot) in [
+        ("--render-samples", a.render_samples, &mut job.samples_view),
+        ("--render-filter", a.render_filter, &mut job.filter_view),
+    ] {
+        if let Some(v) = v {
+            match v[1].parse::<u32>() {
+                Ok(z) if (1..=1000).contains(&z) => *slot = Some((PathBuf::from(&v[0]), z)),
+                _ => {
+                    eprintln!("glint: {what} expects a file and a zoom from 1 to 1000, got {v:?}");
+                    return ExitCode::from(2);
+                }
+            }
+        }
+    }
     match job.run() {
         Ok(report) => {
             if a.stats {
@@ -248,7 +340,8 @@ fn info(path: PathBuf) -> ExitCode {
         }
     };
     let s = scene.summary();
-    let world = glint::world::World::build(&scene, Default::default());
+    // World space: the bounds printed are the scene file's coordinates.
+    let world = glint::world::World::build_world_space(&scene, Default::default());
     let b = world.bounds();
     println!("scene       {}", path.display());
     println!("camera      {}", camera_name(&scene.camera));

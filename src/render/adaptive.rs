@@ -1,0 +1,273 @@
+//! Whitted's adaptive supersampling (1980): trace the four corners of every
+//! pixel (each corner shared with the neighbouring pixels); where they differ
+//! by more than a threshold, split the square into quadrants, trace the five
+//! new points, and recurse to a maximum depth. A square's value is the mean
+//! of its four quadrants, or of its corners when it is not split.
+//!
+//! All points lie on a lattice of `2^depth` steps per pixel, and a point's
+//! colour is a pure function of its lattice coordinates (its higher sample
+//! dimensions are keyed on them too), so a point traced twice, by two tiles,
+//! gives the same colour: tiles stay independent and the image stays the
+//! same for any thread count.
+//!
+//! Pass 1 traces the pixel corners (`(w+1)·(h+1)` rays, rows in parallel);
+//! pass 2 subdivides tile by tile, sharing the new points within a tile.
+//! Points on an edge between two tiles that both split it are traced by
+//! both; the statistics count every ray actually traced.
+
+use super::film::{merge, tiles, Rect, TileFilm};
+use super::{screen_point, CameraModel, Control, Filter, Frame, Rendered, Settings};
+use crate::integrator::{Integrator, NoObserver};
+use crate::math::{Vec2, Vec3};
+use crate::stats::Counters;
+use crate::world::World;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Settings of the subdivision.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Adaptive {
+    /// Split a square when, in some channel, its corners (clamped to
+    /// `[0, 1]`, as displayed) differ by more than this.
+    pub threshold: f32,
+    /// Deepest subdivision: squares of `2^-max_depth` pixels.
+    pub max_depth: u32,
+}
+
+impl Adaptive {
+    /// Default maximum depth: 4 × 4 sub-squares, as many points as 16-spp
+    /// uniform sampling at most.
+    pub const DEFAULT_MAX_DEPTH: u32 = 2;
+    /// Deepest subdivision accepted (256 × 256 sub-squares per pixel).
+    pub const MAX_DEPTH: u32 = 8;
+}
+
+/// Lattice coordinates of a point: `2^max_depth` steps per pixel, `y` up.
+type Point = (u32, u32);
+
+/// Colour and camera-ray hit of a traced point.
+#[derive(Clone, Copy)]
+struct Traced {
+    color: Vec3,
+    hit: Option<(f32, Vec3)>,
+}
+
+/// What traces lattice points: the camera, integrator and settings.
+struct Tracer<'a, I> {
+    world: &'a World,
+    camera: &'a CameraModel,
+    integrator: &'a I,
+    settings: &'a Settings,
+    /// Lattice steps per pixel.
+    steps: u32,
+}
+
+impl<I: Integrator> Tracer<'_, I> {
+    fn trace(&self, (x, y): Point, counters: &mut Counters) -> Traced {
+        let (w, h) = self.settings.size;
+        let s = self.steps;
+        let o = Vec2::new((x % s) as f32 / s as f32, (y % s) as f32 / s as f32);
+        let ray = self.camera.ray(screen_point(x / s, y / s, o, w, h));
+        let key = (x as u64) | (y as u64) << 32;
+        let mut stream = self.settings.sampler.stream_for_key(key);
+        let (color, hit) = self.integrator.li(
+            self.world,
+            &ray,
+            self.camera.tmin(),
+            &mut stream,
+            counters,
+            &mut NoObserver,
+        );
+        Traced {
+            color,
+            hit: hit.map(|h| (h.t, h.normal)),
+        }
+    }
+}
+
+/// Renders with adaptive subdivision (called by [`super::render_image`]).
+pub(super) fn render<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    settings: &Settings,
+    a: &Adaptive,
+    control: Control,
+) -> Rendered {
+    let (w, h) = settings.size;
+    let depth = a.max_depth.min(Adaptive::MAX_DEPTH);
+    let tracer = Tracer {
+        world,
+        camera,
+        integrator,
+        settings,
+        steps: 1 << depth,
+    };
+    // Pass 1: the pixel corners, rows of corners in parallel (bottom first).
+    let corner_rows: Vec<Option<(Vec<Traced>, Counters)>> = (0..=h)
+        .into_par_iter()
+        .map(|j| {
+            if control.cancelled() {
+                return None;
+            }
+            let mut c = Counters::default();
+            let row = (0..=w)
+                .map(|i| tracer.trace((i << depth, j << depth), &mut c))
+                .collect();
+            Some((row, c))
+        })
+        .collect();
+    let mut counters = Counters::default();
+    let corners_done = corner_rows.iter().all(Option::is_some);
+    for (_, c) in corner_rows.iter().flatten() {
+        counters += *c;
+    }
+    let rects = tiles(w, h, settings.tile_size);
+    let films: Vec<Option<(TileFilm, Counters)>> = rects
+        .par_iter()
+        .map(|&rect| {
+            if !corners_done || control.cancelled() {
+                return None;
+            }
+            let out = subdivide_tile(&tracer, a, depth, rect, &corner_rows);
+            control.progress(rect.area() as u64);
+            Some(out)
+        })
+        .collect();
+    let films: Vec<Option<TileFilm>> = films
+        .into_iter()
+        .map(|f| {
+            f.map(|(film, c)| {
+                counters += c;
+                film
+            })
+        })
+        .collect();
+    let mut frame = Frame::new(w, h);
+    merge(&films, settings.tile_size, 0, &mut frame);
+    Rendered {
+        frame,
+        counters,
+        samples: Vec::new(),
+    }
+}
+
+/// Pass 2 for one tile: every pixel's square, subdivided where needed.
+fn subdivide_tile<I: Integrator>(
+    tracer: &Tracer<'_, I>,
+    a: &Adaptive,
+    depth: u32,
+    rect: Rect,
+    corners: &[Option<(Vec<Traced>, Counters)>],
+) -> (TileFilm, Counters) {
+    let (w, h) = tracer.settings.size;
+    // The pixel's colour is set directly (weight 1): the film's filter is
+    // unused, a box of the pixel's own square by construction.
+    let mut film = TileFilm::new(rect, Filter::Box(0.5), (w, h));
+    let mut counters = Counters::default();
+    let mut cache: HashMap<Point, Vec3> = HashMap::new();
+    let corner = |i: u32, j: u32| -> Traced {
+        corners[j as usize].as_ref().expect("pass 1 complete").0[i as usize]
+    };
+    let s = 1u32 << depth;
+    for row in rect.row0..rect.row1 {
+        let j = h - 1 - row;
+        for i in rect.x0..rect.x1 {
+            let c = [
+                corner(i, j).color,
+                corner(i + 1, j).color,
+                corner(i, j + 1).color,
+                corner(i + 1, j + 1).color,
+            ];
+            let mut used = vec![
+                (i * s, j * s),
+                ((i + 1) * s, j * s),
+                (i * s, (j + 1) * s),
+                ((i + 1) * s, (j + 1) * s),
+            ];
+            let mut sq = Square {
+                tracer,
+                threshold: a.threshold,
+                cache: &mut cache,
+                counters: &mut counters,
+                used: &mut used,
+            };
+            let color = sq.value((i * s, j * s), s, c);
+            used.sort_unstable();
+            used.dedup();
+            film.set_pixel(i, row, color);
+            // Depth and normal: the pixel's lower-left corner ray.
+            film.record_hit(i, row, 0.0, corner(i, j).hit);
+            film.set_samples(i, row, used.len() as u32);
+        }
+    }
+    (film, counters)
+}
+
+/// The recursion over one pixel's square.
+struct Square<'a, 't, I> {
+    tracer: &'a Tracer<'t, I>,
+    threshold: f32,
+    cache: &'a mut HashMap<Point, Vec3>,
+    counters: &'a mut Counters,
+    used: &'a mut Vec<Point>,
+}
+
+impl<I: Integrator> Square<'_, '_, I> {
+    /// Colour of a lattice point, traced once per tile.
+    fn point(&mut self, p: Point) -> Vec3 {
+        self.used.push(p);
+        if let Some(&c) = self.cache.get(&p) {
+            return c;
+        }
+        let c = self.tracer.trace(p, self.counters).color;
+        self.cache.insert(p, c);
+        c
+    }
+
+    /// Mean colour over the square at lattice point `p0` (lower-left) with
+    /// edge `size` lattice steps and corner colours `c` (`[00, 10, 01, 11]`).
+    fn value(&mut self, p0: Point, size: u32, c: [Vec3; 4]) -> Vec3 {
+        if size == 1 || spread(&c) <= self.threshold {
+            return (c[0] + c[1] + c[2] + c[3]) * 0.25;
+        }
+        let hs = size / 2;
+        let (x, y) = p0;
+        let b = self.point((x + hs, y));
+        let l = self.point((x, y + hs));
+        let m = self.point((x + hs, y + hs));
+        let r = self.point((x + size, y + hs));
+        let t = self.point((x + hs, y + size));
+        let q00 = self.value((x, y), hs, [c[0], b, l, m]);
+        let q10 = self.value((x + hs, y), hs, [b, c[1], m, r]);
+        let q01 = self.value((x, y + hs), hs, [l, m, c[2], t]);
+        let q11 = self.value((x + hs, y + hs), hs, [m, r, t, c[3]]);
+        (q00 + q10 + q01 + q11) * 0.25
+    }
+}
+
+/// Largest per-channel range of four colours, clamped to the displayable
+/// `[0, 1]` (differences among over-bright values do not show).
+fn spread(c: &[Vec3; 4]) -> f32 {
+    let d = c.map(|v| v.clamp(Vec3::ZERO, Vec3::ONE));
+    let lo = d[0].min(d[1]).min(d[2]).min(d[3]);
+    let hi = d[0].max(d[1]).max(d[2]).max(d[3]);
+    (hi - lo).max_element()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_is_the_largest_channel_range() {
+        let c = [
+            Vec3::new(0.1, 0.5, 0.0),
+            Vec3::new(0.2, 0.5, 0.0),
+            Vec3::new(0.1, 0.9, 0.0),
+            Vec3::new(0.1, 0.5, 3.0),
+        ];
+        assert!((spread(&c) - 1.0).abs() < 1e-6); // blue clamped to 1
+        assert_eq!(spread(&[Vec3::ONE; 4]), 0.0);
+    }
+}

@@ -1,0 +1,348 @@
+//! The film: weighted sums of samples per pixel, kept per tile and merged in
+//! a fixed order.
+//!
+//! Each sample is *splatted*: it adds `w·colour` and `w` to every pixel
+//! within the filter's support, `w` the filter weight of the sample's offset
+//! from that pixel's centre; a pixel is `Σ w·colour / Σ w`. A tile splats
+//! into its own [`TileFilm`], which covers the tile plus a margin of the
+//! filter's support (clipped to the image), so a tile's film is a pure
+//! function of the settings and the tile: tiles can render on any thread (or,
+//! later, any machine). [`merge`] then adds, for every pixel, the films that
+//! cover it in tile order, which fixes the floating-point summation order.
+
+use super::{Filter, Frame};
+use crate::math::{Vec2, Vec3};
+
+/// A rectangle of pixels in frame coordinates (`x` right, `row` down from
+/// the top of the image), half-open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Rect {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub row0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub row1: u32,
+}
+
+impl Rect {
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.row1 - self.row0
+    }
+
+    /// Number of pixels.
+    pub fn area(&self) -> usize {
+        self.width() as usize * self.height() as usize
+    }
+
+    /// Whether `(x, row)` lies inside.
+    pub fn contains(&self, x: u32, row: u32) -> bool {
+        (self.x0..self.x1).contains(&x) && (self.row0..self.row1).contains(&row)
+    }
+
+    /// Grown by `m` pixels on every side, clipped to a `w`×`h` image.
+    pub fn grown(&self, m: u32, w: u32, h: u32) -> Rect {
+        Rect {
+            x0: self.x0.saturating_sub(m),
+            row0: self.row0.saturating_sub(m),
+            x1: (self.x1 + m).min(w),
+            row1: (self.row1 + m).min(h),
+        }
+    }
+}
+
+/// What one tile contributed: filter sums over the tile and its margin, and
+/// the per-pixel planes (depth, normal, sample count) of the tile itself.
+#[derive(Clone, Debug)]
+pub struct TileFilm {
+    /// The tile's own pixels.
+    pub tile: Rect,
+    /// The pixels it splats into: the tile plus the filter margin.
+    pub area: Rect,
+    filter: Filter,
+    support: i32,
+    image: (u32, u32),
+    sum: Vec<Vec3>,
+    weight: Vec<f32>,
+    /// Depth of the kept hit, per tile pixel.
+    pub depth: Vec<f32>,
+    /// Normal of the kept hit, per tile pixel.
+    pub normal: Vec<Vec3>,
+    /// Squared distance of the kept hit's sample from the pixel's reference
+    /// point (the nearest sample's hit is kept).
+    nearest: Vec<f32>,
+    /// Camera rays traced per tile pixel.
+    pub samples: Vec<u32>,
+}
+
+impl TileFilm {
+    /// An empty film for `tile` of a `w`×`h` image reconstructed with `filter`.
+    pub fn new(tile: Rect, filter: Filter, (w, h): (u32, u32)) -> Self {
+        let support = filter.support();
+        let area = tile.grown(support, w, h);
+        let n = tile.area();
+        Self {
+            tile,
+            area,
+            filter,
+            support: support as i32,
+            image: (w, h),
+            sum: vec![Vec3::ZERO; area.area()],
+            weight: vec![0.0; area.area()],
+            depth: vec![f32::INFINITY; n],
+            normal: vec![Vec3::ZERO; n],
+            nearest: vec![f32::INFINITY; n],
+            samples: vec![0; n],
+        }
+    }
+
+    /// Index of tile pixel `(x, row)` in the per-pixel planes.
+    #[inline]
+    pub fn tile_index(&self, x: u32, row: u32) -> usize {
+        (row - self.tile.row0) as usize * self.tile.width() as usize + (x - self.tile.x0) as usize
+    }
+
+    /// Adds a sample of colour `c` taken at in-pixel offset `o` (`y` up) of
+    /// pixel `(x, row)` to every pixel its filter reaches.
+    #[inline]
+    pub fn splat(&mut self, x: u32, row: u32, o: Vec2, c: Vec3) {
+        if self.support == 0 {
+            // The common case (box 0.5, or any filter narrower than a
+            // pixel): only the pixel itself.
+            let w = self.filter.weight(o.x - 0.5, o.y - 0.5);
+            if w != 0.0 {
+                let k = self.area_index(x, row);
+                self.sum[k] += c * w;
+                self.weight[k] += w;
+            }
+            return;
+        }
+        let s = self.support;
+        let (w, h) = (self.image.0 as i32, self.image.1 as i32);
+        for b in -s..=s {
+            // Pixel `b` above in the image is `b` rows up in the frame.
+            let r = row as i32 - b;
+            if r < 0 || r >= h {
+                continue;
+            }
+            for a in -s..=s {
+                let px = x as i32 + a;
+                if px < 0 || px >= w {
+                    continue;
+                }
+                let wt = self
+                    .filter
+                    .weight(o.x - 0.5 - a as f32, o.y - 0.5 - b as f32);
+                if wt != 0.0 {
+                    let k = self.area_index(px as u32, r as u32);
+                    self.sum[k] += c * wt;
+                    self.weight[k] += wt;
+                }
+            }
+        }
+    }
+
+    /// Records a camera ray of tile pixel `(x, row)`; its hit is kept for the
+    /// depth and normal planes if the sample (at squared distance `d2` from
+    /// the pixel's reference point) is the nearest so far.
+    #[inline]
+    pub fn record_hit(&mut self, x: u32, row: u32, d2: f32, hit: Option<(f32, Vec3)>) {
+        let k = self.tile_index(x, row);
+        self.samples[k] += 1;
+        if d2 < self.nearest[k] {
+            self.nearest[k] = d2;
+            let (t, n) = hit.unwrap_or((f32::INFINITY, Vec3::ZERO));
+            self.depth[k] = t;
+            self.normal[k] = n;
+        }
+    }
+
+    /// Sets the reconstructed colour of tile pixel `(x, row)` directly (a
+    /// strategy such as adaptive subdivision that integrates the pixel
+    /// itself), with weight 1.
+    pub fn set_pixel(&mut self, x: u32, row: u32, c: Vec3) {
+        let k = self.area_index(x, row);
+        self.sum[k] = c;
+        self.weight[k] = 1.0;
+    }
+
+    /// Sets the camera-ray count of tile pixel `(x, row)`.
+    pub fn set_samples(&mut self, x: u32, row: u32, n: u32) {
+        let k = self.tile_index(x, row);
+        self.samples[k] = n;
+    }
+
+    #[inline]
+    fn area_index(&self, x: u32, row: u32) -> usize {
+        (row - self.area.row0) as usize * self.area.width() as usize + (x - self.area.x0) as usize
+    }
+}
+
+/// Splits a `w`×`h` image into tiles of `size`×`size` (the last row and
+/// column smaller), row-major from the top-left.
+pub fn tiles(w: u32, h: u32, size: u32) -> Vec<Rect> {
+    let size = size.max(1);
+    let mut out = Vec::new();
+    for row0 in (0..h).step_by(size as usize) {
+        for x0 in (0..w).step_by(size as usize) {
+            out.push(Rect {
+                x0,
+                row0,
+                x1: (x0 + size).min(w),
+                row1: (row0 + size).min(h),
+            });
+        }
+    }
+    out
+}
+
+/// Merges tile films (in the order of [`tiles`]; `None` = not rendered) into
+/// `frame`: each pixel adds the films covering it in tile order and divides
+/// by the summed weight (black if no sample reached it). A row is complete
+/// when every tile that could reach it was rendered.
+pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &mut Frame) {
+    use rayon::prelude::*;
+    let (w, h) = (frame.width, frame.height);
+    let ts = tile_size.max(1);
+    let cols = w.div_ceil(ts);
+    let rows = h.div_ceil(ts);
+    let tile_range = |p: u32, n: u32| {
+        let lo = p.saturating_sub(support) / ts;
+        let hi = ((p + support).min(n * ts - 1)) / ts;
+        lo..=hi
+    };
+    let wu = w as usize;
+    frame
+        .color
+        .par_chunks_mut(wu)
+        .zip(frame.complete.par_iter_mut())
+        .enumerate()
+        .for_each(|(row, (line, complete))| {
+            let row = row as u32;
+            let tys = tile_range(row, rows);
+            *complete = tys
+                .clone()
+                .all(|ty| (0..cols).all(|tx| films[(ty * cols + tx) as usize].is_some()));
+            for (x, out) in line.iter_mut().enumerate() {
+                let x = x as u32;
+                let mut acc: Option<(Vec3, f32)> = None;
+                for ty in tys.clone() {
+                    for tx in tile_range(x, cols) {
+                        let Some(f) = &films[(ty * cols + tx) as usize] else {
+                            continue;
+                        };
+                        if !f.area.contains(x, row) {
+                            continue;
+                        }
+                        let k = f.area_index(x, row);
+                        let (s, wt) = (f.sum[k], f.weight[k]);
+                        acc = Some(match acc {
+                            None => (s, wt),
+                            Some((a, aw)) => (a + s, aw + wt),
+                        });
+                    }
+                }
+                *out = match acc {
+                    Some((s, wt)) if wt > 0.0 => s / wt,
+                    _ => Vec3::ZERO,
+                };
+            }
+        });
+    // Per-pixel planes come from the tile owning the pixel.
+    for f in films.iter().flatten() {
+        for row in f.tile.row0..f.tile.row1 {
+            for x in f.tile.x0..f.tile.x1 {
+                let k = f.tile_index(x, row);
+                let p = row as usize * wu + x as usize;
+                frame.depth[p] = f.depth[k];
+                frame.normal[p] = f.normal[k];
+                frame.samples[p] = f.samples[k];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_cover_the_image_once() {
+        for (w, h, s) in [(1, 1, 16), (33, 17, 16), (64, 64, 32), (5, 100, 7)] {
+            let mut seen = vec![0u8; (w * h) as usize];
+            for t in tiles(w, h, s) {
+                for row in t.row0..t.row1 {
+                    for x in t.x0..t.x1 {
+                        seen[(row * w + x) as usize] += 1;
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&c| c == 1), "{w}x{h} by {s}");
+        }
+    }
+
+    /// The same samples splatted through different tilings give the same
+    /// pixels up to rounding (the order of the sums differs), and a pixel is
+    /// the weighted mean of the samples around it.
+    #[test]
+    fn merge_is_a_weighted_mean_across_tile_borders() {
+        let (w, h) = (7u32, 5u32);
+        let filter = Filter::Tent(1.5);
+        let colour = |x: u32, row: u32| Vec3::new(x as f32, row as f32, 1.0);
+        let render = |ts: u32| {
+            let rects = tiles(w, h, ts);
+            let films: Vec<Option<TileFilm>> = rects
+                .iter()
+                .map(|&t| {
+                    let mut f = TileFilm::new(t, filter, (w, h));
+                    for row in t.row0..t.row1 {
+                        for x in t.x0..t.x1 {
+                            f.splat(x, row, Vec2::new(0.3, 0.6), colour(x, row));
+                        }
+                    }
+                    Some(f)
+                })
+                .collect();
+            let mut frame = Frame::new(w, h);
+            merge(&films, ts, filter.support(), &mut frame);
+            frame
+        };
+        let a = render(2);
+        let b = render(16);
+        for (p, q) in a.color.iter().zip(&b.color) {
+            assert!((*p - *q).length() < 1e-5, "{p} vs {q}");
+        }
+        assert!(a.is_complete());
+        // Blue is 1 everywhere, so its weighted mean is exactly 1.
+        assert!(a.color.iter().all(|c| (c.z - 1.0).abs() < 1e-6));
+        // An interior pixel sees neighbours on both sides: its red lies
+        // strictly between its neighbours'.
+        let c = a.color[(2 * w + 3) as usize];
+        assert!(c.x > 2.0 && c.x < 4.0, "{c}");
+    }
+
+    #[test]
+    fn missing_tiles_leave_rows_incomplete() {
+        let (w, h) = (8, 8);
+        let rects = tiles(w, h, 4);
+        let mut films: Vec<Option<TileFilm>> = rects
+            .iter()
+            .map(|&t| Some(TileFilm::new(t, Filter::Box(0.5), (w, h))))
+            .collect();
+        films[3] = None; // bottom-right tile
+        let mut frame = Frame::new(w, h);
+        merge(&films, 4, 0, &mut frame);
+        assert_eq!(
+            frame.complete,
+            [true, true, true, true, false, false, false, false]
+        );
+    }
+}
