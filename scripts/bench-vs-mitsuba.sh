@@ -6,7 +6,7 @@
 #         `pip install mitsuba` on first use)
 #   REPS  repetitions (default 3): medians are reported
 #   SIZE  image size (default 800)
-# Samples per pixel: 1, and 16 when `glint render --help` lists --spp. Threads: 1 and 2 for glint;
+# Samples per pixel: 1, and 16 when `glint render --help` lists --spp (or SPPS="1 16"). Threads: 1 and 2 for glint;
 # Mitsuba is timed with its default (all cores) pool, which is what its README figure is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,8 +20,12 @@ if ! [ -x "$venv/bin/python" ]; then
   "$venv/bin/pip" install --quiet mitsuba
 fi
 cargo build --release --quiet --bin glint
-spps="1"
-if ./target/release/glint render --help | grep -q -- "--spp"; then spps="1 16"; fi
+spps=${SPPS:-}
+if [ -z "$spps" ]; then
+  # (not `| grep -q`: with pipefail, grep's early exit fails the pipe)
+  help=$(./target/release/glint render --help)
+  if grep -q -- "--spp" <<<"$help"; then spps="1 16"; else spps="1"; fi
+fi
 scene="$shared/scenes/6837/scene6_07_bunny_mesh_40k.txt"
 tmp=$(mktemp -d)
 echo "| spp | Mitsuba s | glint s, 2 threads | glint/Mitsuba | glint s, 1 thread | 2-thread speed-up |"

@@ -1,6 +1,6 @@
 //! The fast BVH, glint's default accelerator: 4-wide nodes tested with
-//! 4-lane box tests, leaves of four-triangle blocks tested with a 4-lane
-//! watertight triangle test, binned SAH built in parallel.
+//! 4-lane box tests, leaves of four-triangle blocks (each lane tested with
+//! the shared watertight test), binned SAH built in parallel.
 //!
 //! - `node.rs`: the layout ([`Node4`]: four boxes in structure-of-arrays form,
 //!   128 bytes; `Tri4`: four triangles' vertices, 160 bytes).

@@ -80,8 +80,8 @@ impl Node4 {
     }
 }
 
-/// An item id marking a lane that is not a triangle: the lane's vertices are
-/// NaN (the triangle test never hits them) and the item is tested through the
+/// An item id flag marking a lane that is not a triangle (its vertices are
+/// NaN): the leaf test skips it, and the item is tested through the
 /// aggregate's fallback (spheres, transformed shapes).
 pub(crate) const OTHER: u32 = 1 << 31;
 /// The id of an unused lane (NaN vertices too).
