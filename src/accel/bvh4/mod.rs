@@ -2,7 +2,7 @@
 //! 4-lane box tests, leaves of four-triangle blocks (each lane tested with
 //! the shared watertight test), binned SAH built in parallel.
 //!
-//! - `node.rs`: the layout ([`Node4`]: four boxes in structure-of-arrays form,
+//! - `node.rs`: the layout (`Node4`: four boxes in structure-of-arrays form,
 //!   128 bytes; `Tri4`: four triangles' vertices, 160 bytes).
 //! - `build.rs`: binned SAH (32 bins, costs counted in blocks of four),
 //!   children built in parallel above 16k items, leaves filled last.
