@@ -81,6 +81,8 @@ pub struct TileFilm {
     nearest: Vec<f32>,
     /// Camera rays traced per tile pixel.
     pub samples: Vec<u32>,
+    /// What each tile pixel's rays cost.
+    pub cost: Vec<super::frame::PixelCost>,
 }
 
 impl TileFilm {
@@ -101,6 +103,7 @@ impl TileFilm {
             normal: vec![Vec3::ZERO; n],
             nearest: vec![f32::INFINITY; n],
             samples: vec![0; n],
+            cost: vec![Default::default(); n],
         }
     }
 
@@ -265,6 +268,7 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
                 frame.depth[p] = f.depth[k];
                 frame.normal[p] = f.normal[k];
                 frame.samples[p] = f.samples[k];
+                frame.cost[p] = f.cost[k];
             }
         }
     }

@@ -4,8 +4,6 @@ use super::Sphere;
 use crate::math::float::{abs_linear, transform_error, transform_point_with_error};
 use crate::math::{gamma, Aabb, Mat4, Ray, SurfacePoint};
 use glam::DMat4;
-#[cfg(test)]
-use glam::Vec3;
 
 /// A shape seen through an affine matrix: used where baking into world space
 /// is impossible (a sphere under non-uniform scale) or switched off. Rays go
@@ -94,6 +92,7 @@ impl Transformed {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Vec3;
 
     #[test]
     fn squashed_sphere_normal_is_perpendicular() {
@@ -139,5 +138,41 @@ mod tests {
             Transformed::new(Shape::Sphere(s), Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)))
                 .is_none()
         );
+    }
+
+    #[test]
+    fn surface_error_covers_the_distance_to_the_exact_surface() {
+        let s = Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        let m = Mat4::from_translation(Vec3::new(3e4, -2e3, 7e3))
+            * Mat4::from_rotation_x(0.4)
+            * Mat4::from_scale(Vec3::new(40.0, 3.0, 15.0));
+        let x = Transformed::new(Shape::Sphere(s), m).unwrap();
+        let mut checked = 0;
+        for k in 0..64 {
+            let a = k as f32 * 0.37;
+            let target = m.transform_point3(Vec3::new(a.cos() * 0.5, a.sin() * 0.5, 0.2));
+            let from = target + Vec3::new(a.sin() * 300.0, 200.0, a.cos() * 300.0);
+            let r = Ray::new(from, target - from);
+            let Some(t) = x.intersect(&r, 0.0, f32::INFINITY) else {
+                continue;
+            };
+            let sp = x.surface(&r, t);
+            // The surface point radially below (in object space), exactly.
+            let md = m.as_dmat4();
+            let q = md.inverse().transform_point3(sp.p.as_dvec3());
+            let on = md.transform_point3(q / q.length());
+            let n = sp.n.as_dvec3();
+            let along = n.dot(sp.p.as_dvec3() - on).abs();
+            assert!(
+                along <= n.abs().dot(sp.error.as_dvec3()),
+                "{along} vs {}",
+                sp.error
+            );
+            checked += 1;
+        }
+        assert!(checked > 50);
     }
 }

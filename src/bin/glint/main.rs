@@ -60,7 +60,7 @@ enum Command {
     },
     /// Render a scene to an image.
     #[command(long_about = RENDER_HELP)]
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Record every ray one pixel spawns: .json tree, .obj/.ply segments, or drawn over the image.
     Raytree(raytree::RaytreeArgs),
     /// Show the grid cells, octree leaves or BVH boxes an accelerator looks at for some pixels' eye rays.
@@ -181,6 +181,9 @@ struct RenderArgs {
     /// Write a heat map of camera rays per pixel, with a scale bar.
     #[arg(long, value_name = "FILE")]
     samples_image: Option<PathBuf>,
+    /// Also write per-pixel cost: intersection tests (left) and nodes or cells visited (right), as heat maps with scale bars and totals.
+    #[arg(long, value_name = "FILE")]
+    cost_image: Option<PathBuf>,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_samples: Option<Vec<String>>,
@@ -203,7 +206,7 @@ fn main() -> ExitCode {
 fn real_main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Render(a) => render(a),
+        Command::Render(a) => render(*a),
         Command::Info { scene } => info(scene),
         Command::Raytree(a) => raytree::run(a),
         Command::Traverse(a) => traverse::run(a),
@@ -303,6 +306,7 @@ fn render(a: RenderArgs) -> ExitCode {
         });
     }
     job.samples_image = a.samples_image;
+    job.cost_image = a.cost_image;
     for (what, v, slot) in [
         ("--render-samples", a.render_samples, &mut job.samples_view),
         ("--render-filter", a.render_filter, &mut job.filter_view),
