@@ -15,7 +15,8 @@
 
 use super::{Primitive, World};
 use crate::accel::{
-    AccelKind, Aggregate, Brute, Bvh, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree, Storage,
+    AccelKind, Aggregate, Brute, Bvh, Bvh4, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree,
+    Storage,
 };
 use crate::math::Vec3;
 use crate::scene::{Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
@@ -167,6 +168,7 @@ fn build_aggregate(
             Box::new(NestedGrid::new(prims, ids, threshold, depth))
         }
         AccelKind::BvhHierarchy => Box::new(HierarchyBvh::new(prims, ids, tree)),
+        AccelKind::Bvh4 => Box::new(Bvh4::new(prims, ids)),
     }
 }
 
