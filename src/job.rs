@@ -382,8 +382,9 @@ impl Job {
                     path.display()
                 )));
             };
-            check_frame_memory(w, h, available_memory())?;
+            // The format's own limit first: it holds on any machine.
             check_image(path, w, h)?;
+            check_frame_memory(w, h, available_memory())?;
         }
         Ok(())
     }

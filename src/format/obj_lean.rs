@@ -10,6 +10,7 @@
 //! as `tobj` does, and polygons become the same fans, so both readers give
 //! the same triangles.
 
+use crate::limits::{MAX_FACE_CORNERS, MAX_OBJ_LINE_BYTES};
 use crate::math::Vec3;
 use crate::scene::Mesh;
 use rayon::prelude::*;
@@ -29,7 +30,8 @@ struct Part {
     excess: i64,
 }
 
-/// The mesh of `text`, or `None` when the careful reader must decide.
+/// The mesh of `text`, or `None` when the careful reader must decide
+/// (anything unusual, every error, and the limits of `crate::limits`).
 pub(crate) fn parse(text: &str) -> Option<Mesh> {
     if !text.is_ascii() {
         return None; // Unicode whitespace: the careful reader's business
@@ -66,7 +68,8 @@ pub(crate) fn parse(text: &str) -> Option<Mesh> {
         mesh.triangles
             .extend(p.triangles.iter().map(|t| t.map(|i| i - 1)));
     }
-    Some(mesh)
+    // A mesh with no faces is an error the careful reader words.
+    (!mesh.triangles.is_empty()).then_some(mesh)
 }
 
 /// Parses one chunk of whole lines.
@@ -77,6 +80,11 @@ fn chunk(text: &str) -> Option<Part> {
     };
     let mut corners: Vec<u32> = Vec::with_capacity(8);
     for line in text.split('\n') {
+        // Over-long lines and huge faces get the careful reader's positioned
+        // refusal (issue 15's limits), before anything is split.
+        if line.len() > MAX_OBJ_LINE_BYTES {
+            return None;
+        }
         let mut words = line.split_ascii_whitespace();
         match words.next() {
             None => {}
@@ -100,7 +108,7 @@ fn chunk(text: &str) -> Option<Part> {
                     let i: u32 = w.parse().ok().filter(|&i| i > 0)?;
                     corners.push(i);
                 }
-                if corners.len() < 3 {
+                if corners.len() < 3 || corners.len() > MAX_FACE_CORNERS {
                     return None;
                 }
                 let defined = part.positions.len() as i64;
