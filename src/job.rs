@@ -466,6 +466,7 @@ impl Job {
         s.filter = self.filter;
         s.adaptive = self.adaptive;
         s.keep_samples = self.samples_view.is_some();
+        s.pixel_cost = self.cost_image.is_some();
         s.tile_size = TILE_SIZE;
         s
     }

@@ -58,6 +58,7 @@ fn sampled(size: (u32, u32), kind: SamplerKind, spp: u32, filter: Filter) -> Set
     Settings {
         sampler: Sampler::new(kind, spp, 0),
         filter,
+        pixel_cost: true,
         ..Settings::one_ray(size, PixelOffset::CENTER)
     }
 }

@@ -36,6 +36,7 @@ fn per_pixel_costs_sum_to_the_totals() {
         let camera = CameraModel::new(&world.camera);
         for spp in [1, 4] {
             let mut settings = Settings::one_ray((37, 23), PixelOffset::CENTER);
+            settings.pixel_cost = true;
             if spp > 1 {
                 settings.sampler = Sampler::new(SamplerKind::Jittered, spp, 7);
             }

@@ -32,8 +32,10 @@ pub struct Frame {
     /// lattice points the pixel's subdivision used (shared corners counted
     /// in every pixel they touch).
     pub samples: Vec<u32>,
-    /// What tracing the pixel's samples cost the accelerators (zero under
-    /// adaptive sampling, whose corners are shared between pixels).
+    /// What tracing the pixel's samples cost the accelerators, if
+    /// [`Settings::pixel_cost`](super::Settings::pixel_cost) asked for it
+    /// (zero otherwise, and under adaptive sampling, whose corners are
+    /// shared between pixels).
     pub cost: Vec<PixelCost>,
     /// Per row (top first): whether it was rendered (a cancelled render
     /// leaves rows out).

@@ -90,6 +90,10 @@ pub struct Settings {
     pub adaptive: Option<Adaptive>,
     /// Keep every sample (position, colour) for the `-render_samples` view.
     pub keep_samples: bool,
+    /// Fill [`Frame::cost`], the per-pixel cost plane of `--cost-image`.
+    /// Off unless asked for: writing it touches 16 bytes a pixel of fresh
+    /// memory, which costs a one-ray render about 2% (`glint bench-loop`).
+    pub pixel_cost: bool,
 }
 
 impl Settings {
@@ -103,6 +107,7 @@ impl Settings {
             tile_size: TILE_SIZE,
             adaptive: None,
             keep_samples: false,
+            pixel_cost: false,
         }
     }
 }
@@ -268,6 +273,13 @@ fn render_bands<I: Integrator>(
         .fixed_offset()
         .map(|o| (o, filter.weight(o.x - 0.5, o.y - 0.5)));
     let one = sampler.spp() == 1;
+    // The one-ray render (the default): a pixel is its sample's colour, no
+    // sums, weights or distances. `0 + c` keeps the film's arithmetic (it
+    // turns a -0 into +0), so the image stays the tiled path's bit for bit.
+    let one_ray = match fixed {
+        Some((o, wt)) if one && wt == 1.0 && !settings.keep_samples => Some(o),
+        _ => None,
+    };
     let parts: Vec<(Counters, Vec<SampleRecord>)> = frame
         .color
         .par_chunks_mut(wu * BAND_ROWS)
@@ -289,6 +301,32 @@ fn render_bands<I: Integrator>(
                     let j = h - 1 - (band * BAND_ROWS + r) as u32;
                     for i in 0..w {
                         let p = r * wu + i as usize;
+                        if let Some(o) = one_ray {
+                            let before = counters;
+                            let mut stream = sampler.stream((i, j), 0);
+                            stream.skip();
+                            let ray = camera.ray(screen_point(i, j, o, w, h));
+                            let (c, hit) = integrator.li(
+                                world,
+                                &ray,
+                                camera.tmin(),
+                                &mut stream,
+                                &mut counters,
+                                &mut NoObserver,
+                            );
+                            color[p] = Vec3::ZERO + c;
+                            depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
+                            normal[p] = hit.map_or(Vec3::ZERO, |h| h.normal);
+                            samples[p] = 1;
+                            if settings.pixel_cost {
+                                cost[p] = PixelCost {
+                                    tests: counters.intersection_tests
+                                        - before.intersection_tests,
+                                    nodes: counters.nodes_visited - before.nodes_visited,
+                                };
+                            }
+                            continue;
+                        }
                         let (mut sum, mut wsum, mut nearest) = (Vec3::ZERO, 0.0f32, f32::INFINITY);
                         let before = counters;
                         for k in 0..sampler.spp() {
@@ -348,10 +386,12 @@ fn render_bands<I: Integrator>(
                             Vec3::ZERO
                         };
                         samples[p] = sampler.spp();
-                        cost[p] = PixelCost {
-                            tests: counters.intersection_tests - before.intersection_tests,
-                            nodes: counters.nodes_visited - before.nodes_visited,
-                        };
+                        if settings.pixel_cost {
+                            cost[p] = PixelCost {
+                                tests: counters.intersection_tests - before.intersection_tests,
+                                nodes: counters.nodes_visited - before.nodes_visited,
+                            };
+                        }
                     }
                     *done = true;
                 }
@@ -414,11 +454,13 @@ fn render_tile<I: Integrator>(
                     });
                 }
             }
-            let k = film.tile_index(i, row);
-            film.cost[k] = PixelCost {
-                tests: counters.intersection_tests - before.intersection_tests,
-                nodes: counters.nodes_visited - before.nodes_visited,
-            };
+            if settings.pixel_cost {
+                let k = film.tile_index(i, row);
+                film.cost[k] = PixelCost {
+                    tests: counters.intersection_tests - before.intersection_tests,
+                    nodes: counters.nodes_visited - before.nodes_visited,
+                };
+            }
         }
     }
     (film, counters, kept)

@@ -53,11 +53,11 @@ pub fn run(args: &LoopArgs) -> Result<(), String> {
         let (mut t_old, mut t_new) = (Vec::new(), Vec::new());
         for _ in 0..args.runs.max(1) {
             let t = Instant::now();
-            std::hint::black_box(old());
-            t_old.push(t.elapsed().as_secs_f64() * 1e3);
-            let t = Instant::now();
             std::hint::black_box(new());
             t_new.push(t.elapsed().as_secs_f64() * 1e3);
+            let t = Instant::now();
+            std::hint::black_box(old());
+            t_old.push(t.elapsed().as_secs_f64() * 1e3);
         }
         let (mo, mn) = (median(&mut t_old), median(&mut t_new));
         ratios.push(mn / mo);
