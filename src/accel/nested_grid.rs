@@ -236,7 +236,9 @@ impl Builder<'_> {
             // Every cell has the same area: Σ area(c)/area · (1 + n_c).
             let share = lattice.cell_bounds([0, 0, 0]).surface_area() / region.surface_area();
             let cost = share * (CELL_COST * cells as f32 + items.len() as f32);
-            if !(cost < ids.len() as f32) {
+            // A NaN cost (a region without area) does not pay either.
+            let pays = cost < ids.len() as f32;
+            if !pays {
                 return None;
             }
         }
