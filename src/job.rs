@@ -2,14 +2,14 @@
 //! The binaries only translate their flags into a [`Job`].
 
 use crate::format::{load_scene, ParseError};
-use crate::integrator::Whitted;
+use crate::integrator::{AmbientOcclusion, AoSettings, Whitted};
 use crate::output::{write_rgb, OutputError};
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, Settings,
-    TILE_SIZE,
+    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, SamplerKind,
+    Settings, TILE_SIZE,
 };
-use crate::scene::Scene;
+use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
 use crate::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
@@ -61,6 +61,11 @@ pub struct Job {
     pub progress: bool,
     /// Write the statistics as JSON here.
     pub stats_json: Option<PathBuf>,
+    /// Rays per effect given on the command line; each one set overrides
+    /// the scene's `Samples`/`AmbientOcclusion` count.
+    pub effect_samples: SampleOverrides,
+    /// Render the grey ambient-occlusion image instead of the shaded one.
+    pub ao_image: bool,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -181,6 +186,8 @@ impl Job {
             cancel: None,
             progress: false,
             stats_json: None,
+            effect_samples: SampleOverrides::default(),
+            ao_image: false,
         }
     }
 
@@ -194,6 +201,37 @@ impl Job {
         s.adaptive = self.adaptive;
         s.keep_samples = self.samples_view.is_some();
         s.tile_size = TILE_SIZE;
+        s
+    }
+
+    /// [`Job::settings`] for `scene`: time and lens samples multiply the
+    /// camera samples per pixel (when the scene has motion blur or depth of
+    /// field). When no sampler was asked for and the scene samples anything
+    /// (area lights, glossy materials, shutter, lens, ambient occlusion),
+    /// Owen-scrambled Sobol replaces the fixed one-ray sampler, whose regular
+    /// grid would band soft shadows and strobe motion.
+    pub fn effect_settings(&self, scene: &Scene, samples: EffectSamples) -> Settings {
+        let mut s = self.settings();
+        let lens = &scene.effects.lens;
+        let mut camera_rays = 1u32;
+        if lens.has_motion_blur() {
+            camera_rays = camera_rays.saturating_mul(samples.time);
+        }
+        if lens.has_depth_of_field() {
+            camera_rays = camera_rays.saturating_mul(samples.lens);
+        }
+        let kind = match self.sampler {
+            Some(sm) => sm.kind,
+            None if camera_rays > 1 || self.ao_image || uses_sampling(scene) => SamplerKind::Sobol,
+            None => s.sampler.kind,
+        };
+        if kind != s.sampler.kind || camera_rays > 1 {
+            s.sampler = Sampler::new(
+                kind,
+                s.sampler.spp().saturating_mul(camera_rays),
+                s.sampler.seed,
+            );
+        }
         s
     }
 
@@ -212,7 +250,22 @@ impl Job {
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
-        let camera = CameraModel::new(&scene.camera);
+        let camera = CameraModel::new(&scene.camera).with_lens(scene.effects.lens);
+        let samples = self.effect_samples.apply(scene.effects.samples);
+        let mut integrator = self.integrator;
+        integrator.shadow_samples = samples.shadow;
+        integrator.glossy_samples = samples.glossy;
+        let ao = |distance| AoSettings {
+            samples: samples.ao,
+            distance,
+        };
+        integrator.ambient_occlusion = scene.effects.ambient_occlusion.map(|a| ao(a.distance));
+        let ao_integrator = AmbientOcclusion {
+            settings: ao(scene
+                .effects
+                .ambient_occlusion
+                .map_or(f32::INFINITY, |a| a.distance)),
+        };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.threads.unwrap_or(0))
             .build()
@@ -229,10 +282,15 @@ impl Job {
             cancel: self.cancel.as_deref(),
             on_progress: Some(&tick),
         };
-        let settings = self.settings();
+        let settings = self.effect_settings(&scene, samples);
         let start = Instant::now();
-        let rendered =
-            pool.install(|| render_image(&world, &camera, &self.integrator, &settings, control));
+        let rendered = pool.install(|| {
+            if self.ao_image {
+                render_image(&world, &camera, &ao_integrator, &settings, control)
+            } else {
+                render_image(&world, &camera, &integrator, &settings, control)
+            }
+        });
         let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();
         if let Some(b) = bar {
@@ -305,6 +363,48 @@ impl Job {
     }
 }
 
+/// Effect ray counts from the command line; `None` keeps the scene's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SampleOverrides {
+    /// `--shadow-samples`.
+    pub shadow: Option<u32>,
+    /// `--glossy-samples`.
+    pub glossy: Option<u32>,
+    /// `--time-samples`.
+    pub time: Option<u32>,
+    /// `--lens-samples`.
+    pub lens: Option<u32>,
+    /// `--ao-samples`.
+    pub ao: Option<u32>,
+}
+
+impl SampleOverrides {
+    /// The scene's counts with these overrides applied.
+    pub fn apply(&self, scene: EffectSamples) -> EffectSamples {
+        EffectSamples {
+            shadow: self.shadow.unwrap_or(scene.shadow),
+            glossy: self.glossy.unwrap_or(scene.glossy),
+            time: self.time.unwrap_or(scene.time),
+            lens: self.lens.unwrap_or(scene.lens),
+            ao: self.ao.unwrap_or(scene.ao),
+        }
+    }
+}
+
+/// Whether anything in `scene` takes random decisions: an area light, a
+/// glossy material, a shutter interval, a lens, ambient occlusion.
+pub fn uses_sampling(scene: &Scene) -> bool {
+    let e = &scene.effects;
+    scene.lights.iter().any(|l| matches!(l, Light::Area { .. }))
+        || scene
+            .materials
+            .iter()
+            .any(|m| matches!(m, Material::Phong(p) if p.glossiness > 0.0))
+        || e.lens.has_motion_blur()
+        || e.lens.has_depth_of_field()
+        || e.ambient_occlusion.is_some()
+}
+
 fn progress_bar(pixels: u64) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(pixels);
     if let Ok(style) = indicatif::ProgressStyle::with_template(
@@ -345,6 +445,10 @@ pub struct Stats {
     pub rays_reflected: u64,
     /// Refracted rays.
     pub rays_refracted: u64,
+    /// Of the reflected and refracted rays, those over a glossy lobe.
+    pub rays_glossy: u64,
+    /// Ambient-occlusion rays.
+    pub rays_occlusion: u64,
     /// All rays.
     pub rays_total: u64,
     /// Ray–primitive intersection tests.
@@ -429,6 +533,8 @@ impl Report {
             rays_shadow: c.shadow,
             rays_reflected: c.reflected,
             rays_refracted: c.refracted,
+            rays_glossy: c.glossy,
+            rays_occlusion: c.occlusion,
             rays_total: c.rays_total(),
             intersection_tests: c.intersection_tests,
             nodes_visited: c.nodes_visited,
@@ -466,6 +572,8 @@ impl Report {
         line("shadow rays", st.rays_shadow.to_string());
         line("reflected rays", st.rays_reflected.to_string());
         line("refracted rays", st.rays_refracted.to_string());
+        line("  of which glossy", st.rays_glossy.to_string());
+        line("occlusion rays", st.rays_occlusion.to_string());
         line("rays total", st.rays_total.to_string());
         line("intersection tests", st.intersection_tests.to_string());
         line("nodes visited", st.nodes_visited.to_string());

@@ -290,6 +290,7 @@ fn scene(seed: u64) -> (Scene, bool) {
         background: Background::default(),
         materials: vec![],
         root,
+        effects: Default::default(),
     };
     (scene, lattice_rays && seed % 4 != 3)
 }

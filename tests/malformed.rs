@@ -224,7 +224,7 @@ const CASES: &[Case] = &[
         "unknown_block.txt",
         8,
         1,
-        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group), found 'Light'",
+        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group, Samples, AmbientOcclusion), found 'Light'",
     ),
     case(
         "unknown_field.txt",
@@ -248,7 +248,7 @@ const CASES: &[Case] = &[
         "stray_close_brace.txt",
         7,
         1,
-        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group), found '}'",
+        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group, Samples, AmbientOcclusion), found '}'",
     ),
     case(
         "missing_camera_brace.txt",

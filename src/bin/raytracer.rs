@@ -151,7 +151,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             }
             "-adaptive" => {
                 let t: f32 = number(flag, value("a threshold")?)?;
-                if !(t >= 0.0) {
+                if t.is_nan() || t < 0.0 {
                     return Err(format!("-adaptive {t}: the threshold must be at least 0"));
                 }
                 job.adaptive = Some(Adaptive {

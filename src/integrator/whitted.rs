@@ -1,12 +1,23 @@
 //! The Whitted ray tree: local Phong shading with shadow rays, plus one
 //! reflected and one refracted child ray per hit, recursing until `bounces`
 //! or until a branch's contribution drops below `weight_cutoff`.
+//!
+//! With distribution effects it is Cook's distribution ray tracer: area
+//! lights get `shadow_samples` shadow rays stratified over their surface,
+//! glossy materials `glossy_samples` rays over their lobe, and the ambient
+//! term an ambient-occlusion factor; every choice is a dimension of the
+//! camera sample's stream. Without them (point and directional lights,
+//! mirrors, no AO) the tree takes no stream dimension and is exactly the
+//! classic one.
 
+use super::ao::{unoccluded, AoSettings};
 use super::optics::{reflect, refract};
 use super::{RayKind, RayObserver};
-use crate::light::incident;
+use crate::light::{incident, is_delta, sample_light};
+use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
-use crate::math::{offset_origin, Ray, Vec3};
+use crate::math::{offset_origin, Ray, Vec2, Vec3};
+use crate::render::{SampleStream, Sampler};
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 
@@ -27,6 +38,14 @@ pub struct Whitted {
     pub transparent_shadows: bool,
     /// Space in which textures are looked up.
     pub texture_space: TextureSpace,
+    /// Shadow rays per area light per shaded point.
+    pub shadow_samples: u32,
+    /// Rays over a glossy lobe at the first glossy hit of a camera ray
+    /// (deeper glossy hits take one, so the tree does not grow as
+    /// `glossy_samples^depth`).
+    pub glossy_samples: u32,
+    /// Multiply the ambient term by the ambient occlusion of the point.
+    pub ambient_occlusion: Option<AoSettings>,
 }
 
 impl Default for Whitted {
@@ -38,12 +57,18 @@ impl Default for Whitted {
             shade_back: false,
             transparent_shadows: false,
             texture_space: TextureSpace::World,
+            shadow_samples: 1,
+            glossy_samples: 1,
+            ambient_occlusion: None,
         }
     }
 }
 
 impl Whitted {
     /// Colour seen along `ray` (hits with `t > tmin`), and the hit itself.
+    /// Any sampled effect takes its values from the pixel-centre stream of a
+    /// one-sample uniform sampler (the centre of each light, lobe and
+    /// hemisphere stratum).
     #[allow(clippy::too_many_arguments)]
     pub fn trace(
         &self,
@@ -56,11 +81,32 @@ impl Whitted {
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> (Vec3, Option<Hit>) {
+        let sampler = Sampler::fixed(Vec2::splat(0.5));
+        let mut stream = sampler.stream((0, 0), 0);
+        stream.next_2d();
+        self.trace_sampled(world, ray, tmin, kind, depth, weight, &mut stream, c, obs)
+    }
+
+    /// [`Whitted::trace`] taking every random decision from `stream`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_sampled(
+        &self,
+        world: &World,
+        ray: &Ray,
+        tmin: f32,
+        kind: RayKind,
+        depth: u32,
+        weight: f32,
+        stream: &mut SampleStream,
+        c: &mut Counters,
+        obs: &mut impl RayObserver,
+    ) -> (Vec3, Option<Hit>) {
         match kind {
             RayKind::Primary => c.primary += 1,
             RayKind::Reflected => c.reflected += 1,
             RayKind::Transmitted => c.refracted += 1,
             RayKind::Shadow => c.shadow += 1,
+            RayKind::Occlusion => c.occlusion += 1,
         }
         let hit = world.intersect(ray, tmin, f32::INFINITY, c);
         obs.ray(
@@ -73,7 +119,10 @@ impl Whitted {
         );
         match hit {
             None => (world.background.color, None),
-            Some(h) => (self.shade(world, ray, &h, depth, weight, c, obs), Some(h)),
+            Some(h) => (
+                self.shade(world, ray, &h, depth, weight, stream, c, obs),
+                Some(h),
+            ),
         }
     }
 
@@ -85,6 +134,7 @@ impl Whitted {
         hit: &Hit,
         depth: u32,
         weight: f32,
+        stream: &mut SampleStream,
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> Vec3 {
@@ -103,7 +153,16 @@ impl Whitted {
         );
 
         let mut color = world.background.ambient * m.diffuse;
+        if let Some(ao) = &self.ambient_occlusion {
+            if color != Vec3::ZERO {
+                color *= unoccluded(world, p, n, ray.time, ao, depth, stream, c, obs);
+            }
+        }
         for light in &world.lights {
+            if !is_delta(light) {
+                color += self.area_light(world, ray, light, &m, p, n, d, depth, stream, c, obs);
+                continue;
+            }
             let inc = incident(light, p);
             let reflected = phong_light(&m, n, inc.to_light, -d, inc.color);
             if reflected == Vec3::ZERO {
@@ -112,7 +171,7 @@ impl Whitted {
             // A light exactly at the point (zero direction) has nothing in
             // between, and a zero-direction shadow ray would be meaningless.
             if self.shadows && inc.to_light != Vec3::ZERO {
-                let shadow = Ray::new(offset_origin(p, n, inc.to_light), inc.to_light);
+                let shadow = ray.child(offset_origin(p, n, inc.to_light), inc.to_light);
                 color +=
                     reflected * self.light_through(world, &shadow, inc.distance, depth, c, obs);
             } else {
@@ -126,14 +185,18 @@ impl Whitted {
         let refl_w = weight * m.reflective.max_element();
         if refl_w > 0.0 && refl_w >= self.weight_cutoff {
             let r = reflect(d, n);
-            let child = Ray::new(offset_origin(p, n, r), r);
-            let (rc, _) = self.trace(
+            let rc = self.spread(
                 world,
-                &child,
-                0.0,
+                ray,
+                p,
+                n,
+                r,
+                n,
+                m.glossiness,
                 RayKind::Reflected,
-                depth + 1,
+                depth,
                 refl_w,
+                stream,
                 c,
                 obs,
             );
@@ -144,14 +207,18 @@ impl Whitted {
             // Entering or leaving is decided by the side of the geometric normal.
             let (n_i, n_t) = if back { (m.ior, 1.0) } else { (1.0, m.ior) };
             if let Some(t) = refract(d, n, n_i, n_t) {
-                let child = Ray::new(offset_origin(p, n, t), t);
-                let (tc, _) = self.trace(
+                let tc = self.spread(
                     world,
-                    &child,
-                    0.0,
+                    ray,
+                    p,
+                    n,
+                    t,
+                    -n,
+                    m.glossiness,
                     RayKind::Transmitted,
-                    depth + 1,
+                    depth,
                     trans_w,
+                    stream,
                     c,
                     obs,
                 );
@@ -159,6 +226,86 @@ impl Whitted {
             }
         }
         color
+    }
+
+    /// Colour arriving along the child direction `axis` from `p`: one ray for
+    /// a mirror or clear glass (`glossiness` 0), else the mean of rays over
+    /// the glossy lobe around `axis` on the `side` of the surface.
+    #[allow(clippy::too_many_arguments)]
+    fn spread(
+        &self,
+        world: &World,
+        ray: &Ray,
+        p: Vec3,
+        n: Vec3,
+        axis: Vec3,
+        side: Vec3,
+        glossiness: f32,
+        kind: RayKind,
+        depth: u32,
+        weight: f32,
+        stream: &mut SampleStream,
+        c: &mut Counters,
+        obs: &mut impl RayObserver,
+    ) -> Vec3 {
+        if glossiness <= 0.0 {
+            let child = ray.child(offset_origin(p, n, axis), axis);
+            return self
+                .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
+                .0;
+        }
+        let e = lobe_exponent(glossiness);
+        let k = if depth == 0 {
+            self.glossy_samples.max(1)
+        } else {
+            1
+        };
+        let mut sum = Vec3::ZERO;
+        for u in stream.split_2d(k) {
+            let w = sample_lobe(axis, side, e, u);
+            let child = ray.child(offset_origin(p, n, w), w);
+            c.glossy += 1;
+            sum += self
+                .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
+                .0;
+        }
+        sum / k as f32
+    }
+
+    /// Light from an area light: the mean over `shadow_samples` points of it,
+    /// stratified by one split dimension of the stream, each with its own
+    /// shadow ray (the penumbra is the fraction of them blocked).
+    #[allow(clippy::too_many_arguments)]
+    fn area_light(
+        &self,
+        world: &World,
+        ray: &Ray,
+        light: &crate::scene::Light,
+        m: &crate::scene::Phong,
+        p: Vec3,
+        n: Vec3,
+        d: Vec3,
+        depth: u32,
+        stream: &mut SampleStream,
+        c: &mut Counters,
+        obs: &mut impl RayObserver,
+    ) -> Vec3 {
+        let k = self.shadow_samples.max(1);
+        let mut sum = Vec3::ZERO;
+        for u in stream.split_2d(k) {
+            let inc = sample_light(light, p, u);
+            let reflected = phong_light(m, n, inc.to_light, -d, inc.color);
+            if reflected == Vec3::ZERO {
+                continue;
+            }
+            if self.shadows {
+                let shadow = ray.child(offset_origin(p, n, inc.to_light), inc.to_light);
+                sum += reflected * self.light_through(world, &shadow, inc.distance, depth, c, obs);
+            } else {
+                sum += reflected;
+            }
+        }
+        sum / k as f32
     }
 
     /// The point handed to the material: the world-space hit (the 6.837
@@ -214,7 +361,7 @@ impl Whitted {
                 return filter;
             }
             left -= h.t;
-            ray = Ray::new(offset_origin(h.point, h.normal, ray.dir), ray.dir);
+            ray = ray.child(offset_origin(h.point, h.normal, ray.dir), ray.dir);
         }
         Vec3::ZERO
     }

@@ -1,6 +1,11 @@
-//! Light sampling: what a light sends to a surface point.
+//! Light sampling: what a light sends to a surface point. Point and
+//! directional lights send it along one direction ([`incident`]); area lights
+//! ([`area`]) are sampled: [`sample_light`] takes a 2-D sample choosing a
+//! point of the light.
 
-use crate::math::Vec3;
+pub mod area;
+
+use crate::math::{Vec2, Vec3};
 use crate::scene::Light;
 
 /// Light arriving at a point from one light.
@@ -15,9 +20,40 @@ pub struct Incident {
     pub distance: f32,
 }
 
-/// What `light` sends to point `p`.
+impl Incident {
+    /// No light at all.
+    pub const NONE: Incident = Incident {
+        to_light: Vec3::ZERO,
+        color: Vec3::ZERO,
+        distance: 0.0,
+    };
+}
+
+/// Whether the light comes from a single point or direction (one shadow ray
+/// says everything) rather than from a surface that must be sampled.
+pub fn is_delta(light: &Light) -> bool {
+    !matches!(light, Light::Area { .. })
+}
+
+/// What `light` sends to point `p` through the light point chosen by `u`
+/// (ignored by point and directional lights), divided by the density of
+/// that choice: the mean over stratified `u` is the light's contribution.
+pub fn sample_light(light: &Light, p: Vec3, u: Vec2) -> Incident {
+    match light {
+        Light::Area {
+            shape,
+            color,
+            power,
+        } => area::sample(shape, area::radiance(shape, *color, *power), p, u),
+        _ => incident(light, p),
+    }
+}
+
+/// What `light` sends to point `p`; an area light is taken at the centre of
+/// its sample domain (use [`sample_light`] to sample it).
 pub fn incident(light: &Light, p: Vec3) -> Incident {
     match light {
+        Light::Area { .. } => sample_light(light, p, Vec2::splat(0.5)),
         // Directions are normalised in f64: in f32, the length of a vector
         // longer than ~1e19 overflows (shorter than ~1e-19 underflows) and the
         // light was silently lost.

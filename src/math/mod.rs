@@ -2,8 +2,10 @@
 //! self-intersection offset shared by every shape.
 
 mod aabb;
+mod motion;
 mod ray;
 
 pub use aabb::Aabb;
-pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+pub use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
+pub use motion::{Keyframe, Motion};
 pub use ray::{offset_origin, Ray};

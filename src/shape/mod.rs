@@ -4,11 +4,13 @@
 //! A ray hits a shape at `t` only when `tmin < t < tmax`, strictly: a ray that
 //! starts on a surface (after the origin offset) cannot re-hit it at `t = tmin`.
 
+mod moving;
 mod plane;
 mod sphere;
 mod transformed;
 mod triangle;
 
+pub use moving::Moving;
 pub use plane::Plane;
 pub use sphere::Sphere;
 pub use transformed::Transformed;
@@ -28,6 +30,9 @@ pub enum Shape {
     /// A shape that could not be baked into world space (a sphere under
     /// non-uniform scale): rays are carried into its space instead.
     Transformed(Box<Transformed>),
+    /// A shape under a keyframed motion (motion blur): rays are carried into
+    /// its space at their own time.
+    Moving(Box<Moving>),
 }
 
 impl Shape {
@@ -39,17 +44,20 @@ impl Shape {
             Shape::Plane(p) => p.intersect(ray, tmin, tmax),
             Shape::Triangle(t) => t.intersect(ray, tmin, tmax),
             Shape::Transformed(x) => x.intersect(ray, tmin, tmax),
+            Shape::Moving(m) => m.intersect(ray, tmin, tmax),
         }
     }
 
     /// Unit geometric normal at the point `p` of this shape's surface (outward
-    /// for spheres, counter-clockwise front for triangles).
-    pub fn normal(&self, p: Vec3) -> Vec3 {
+    /// for spheres, counter-clockwise front for triangles), at instant `time`
+    /// (only moving shapes look at it).
+    pub fn normal(&self, p: Vec3, time: f32) -> Vec3 {
         match self {
             Shape::Sphere(s) => s.normal(p),
             Shape::Plane(pl) => pl.normal,
             Shape::Triangle(t) => t.normal,
-            Shape::Transformed(x) => x.normal(p),
+            Shape::Transformed(x) => x.normal(p, time),
+            Shape::Moving(m) => m.normal(p, time),
         }
     }
 
@@ -60,6 +68,7 @@ impl Shape {
             Shape::Plane(p) => p.bounds(),
             Shape::Triangle(t) => t.bounds(),
             Shape::Transformed(x) => x.bounds(),
+            Shape::Moving(m) => m.bounds(),
         }
     }
 }

@@ -29,7 +29,7 @@ impl Transformed {
     }
 
     fn object_ray(&self, ray: &Ray) -> Ray {
-        Ray::new(
+        ray.child(
             self.to_object.transform_point3(ray.origin),
             self.to_object.transform_vector3(ray.dir),
         )
@@ -43,8 +43,8 @@ impl Transformed {
 
     /// World normal at world point `p`: the object normal carried by the
     /// inverse transpose, which keeps it perpendicular under non-uniform scale.
-    pub fn normal(&self, p: Vec3) -> Vec3 {
-        let n_obj = self.shape.normal(self.to_object.transform_point3(p));
+    pub fn normal(&self, p: Vec3, time: f32) -> Vec3 {
+        let n_obj = self.shape.normal(self.to_object.transform_point3(p), time);
         self.to_object
             .transpose()
             .transform_vector3(n_obj)
@@ -79,7 +79,7 @@ mod tests {
         let p = r.at(t);
         // On the ellipse x²/4 + y²/0.25 = 1 at x = 1: y = sqrt(0.75)/2.
         assert!((p.y - 0.75f32.sqrt() / 2.0).abs() < 1e-5);
-        let n = x.normal(p);
+        let n = x.normal(p, 0.0);
         // Gradient of x²/4 + 4y²: (x/2, 8y, 0).
         let g = Vec3::new(p.x / 2.0, 8.0 * p.y, 0.0).normalize();
         assert!((n - g).length() < 1e-5);

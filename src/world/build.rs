@@ -10,7 +10,7 @@ use super::{Primitive, World};
 use crate::accel::{AccelKind, Aggregate, Brute, Bvh, Grid, Octree};
 use crate::math::{Mat4, Vec3};
 use crate::scene::{Material, Node, Phong, Scene, Shape as Desc};
-use crate::shape::{Plane, Shape, Sphere, Transformed, Triangle};
+use crate::shape::{Moving, Plane, Shape, Sphere, Transformed, Triangle};
 use std::time::Instant;
 
 /// How to build the world.
@@ -90,6 +90,23 @@ impl Flattener {
                 self.object_from_world.push(inv);
                 let instance = (self.object_from_world.len() - 1) as u32;
                 self.node(child, m, instance);
+            }
+            Node::Moving { motion, child } => {
+                // The subtree is flattened in the motion's object space and
+                // each of its primitives wrapped: the static transforms
+                // inside are baked as usual, the motion and the static part
+                // outside are applied per ray at the ray's time.
+                let start = self.prims.len();
+                self.node(child, Mat4::IDENTITY, instance);
+                let inner: Vec<Primitive> = self.prims.drain(start..).collect();
+                for p in inner {
+                    if let Some(mv) = Moving::new(p.shape, motion.clone(), m) {
+                        self.prims.push(Primitive {
+                            shape: Shape::Moving(Box::new(mv)),
+                            ..p
+                        });
+                    }
+                }
             }
             Node::Shape { shape, material } => {
                 let material = material.map_or(self.default_material, |i| i as u32);
@@ -231,6 +248,7 @@ mod tests {
             background: Background::default(),
             materials: vec![],
             root,
+            effects: Default::default(),
         }
     }
 

@@ -69,7 +69,7 @@ impl World {
             Hit {
                 t: h.t,
                 point,
-                normal: p.shape.normal(point),
+                normal: p.shape.normal(point, ray.time),
                 prim: h.prim,
                 material: p.material,
                 instance: p.instance,

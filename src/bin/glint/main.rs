@@ -47,7 +47,7 @@ enum Command {
         only: Option<String>,
     },
     /// Render a scene to an image.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -134,6 +134,31 @@ struct RenderArgs {
     /// The course's filter view: the filter's weights around the central pixel, zoomed.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_filter: Option<Vec<String>>,
+    /// Shadow rays per area light per shaded point (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    shadow_samples: Option<u32>,
+    /// Rays per glossy lobe (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    glossy_samples: Option<u32>,
+    /// Shutter instants per pixel sample: camera rays = spp x time x lens (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    time_samples: Option<u32>,
+    /// Lens points per pixel sample: camera rays = spp x time x lens (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    lens_samples: Option<u32>,
+    /// Ambient-occlusion rays per shaded point (overrides the scene's AmbientOcclusion).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    ao_samples: Option<u32>,
+    /// What to compute: whitted (shaded image) or ao (grey ambient-occlusion image).
+    #[arg(long, value_enum, default_value_t = IntegratorName::Whitted)]
+    integrator: IntegratorName,
+}
+
+/// Command-line names of the integrators.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum IntegratorName {
+    Whitted,
+    Ao,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -150,7 +175,7 @@ fn main() -> ExitCode {
 fn real_main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Render(a) => render(a),
+        Command::Render(a) => render(*a),
         Command::Info { scene } => info(scene),
         Command::Bench {
             scenes,
@@ -211,7 +236,7 @@ fn render(a: RenderArgs) -> ExitCode {
     }
     job.filter = a.filter;
     if let Some(t) = a.adaptive {
-        if !(t >= 0.0) {
+        if t.is_nan() || t < 0.0 {
             eprintln!("glint: --adaptive {t}: the threshold must be at least 0");
             return ExitCode::from(2);
         }
@@ -221,6 +246,14 @@ fn render(a: RenderArgs) -> ExitCode {
         });
     }
     job.samples_image = a.samples_image;
+    job.effect_samples = glint::job::SampleOverrides {
+        shadow: a.shadow_samples,
+        glossy: a.glossy_samples,
+        time: a.time_samples,
+        lens: a.lens_samples,
+        ao: a.ao_samples,
+    };
+    job.ao_image = a.integrator == IntegratorName::Ao;
     for (what, v, slot) in [
         ("--render-samples", a.render_samples, &mut job.samples_view),
         ("--render-filter", a.render_filter, &mut job.filter_view),

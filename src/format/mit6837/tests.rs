@@ -21,7 +21,7 @@ fn error(src: &str) -> ParseError {
 fn leaves(n: &Node, out: &mut Vec<(Shape, Option<usize>)>) {
     match n {
         Node::Group(c) => c.iter().for_each(|c| leaves(c, out)),
-        Node::Transform { child, .. } => leaves(child, out),
+        Node::Transform { child, .. } | Node::Moving { child, .. } => leaves(child, out),
         Node::Shape { shape, material } => out.push((shape.clone(), *material)),
     }
 }
@@ -109,6 +109,7 @@ fn materials_defaults_and_fields() {
         reflective: Vec3::splat(0.1),
         transparent: Vec3::splat(0.5),
         ior: 1.5,
+        glossiness: 0.0,
     };
     assert_eq!(s.materials[2], Material::Phong(want));
 }

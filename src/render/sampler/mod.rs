@@ -11,8 +11,10 @@
 
 mod hash;
 mod sobol;
+mod split;
 
 pub use hash::{hash, mix64, permute, unit_f32};
+pub use split::Split2d;
 
 use crate::math::Vec2;
 use std::fmt;
@@ -75,7 +77,7 @@ impl Sampler {
     pub fn new(kind: SamplerKind, spp: u32, seed: u64) -> Self {
         let spp = spp.max(1);
         let mut kx = (spp as f64).sqrt() as u32;
-        while kx > 1 && spp % kx != 0 {
+        while kx > 1 && !spp.is_multiple_of(kx) {
             kx -= 1;
         }
         Self {
