@@ -1,9 +1,10 @@
 //! One render as both command lines describe it: load, build, render, write.
 //! The binaries only translate their flags into a [`Job`].
 
+use crate::accel::AccelKind;
 use crate::format::{load_scene, ParseError};
 use crate::integrator::{AmbientOcclusion, AoSettings, Whitted};
-use crate::output::{write_rgb, OutputError};
+use crate::output::{check_path, write_rgb, OutputError};
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
     render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, SamplerKind,
@@ -11,6 +12,8 @@ use crate::render::{
 };
 use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
+use crate::viz::draw::Canvas;
+use crate::viz::grid::{legend, voxelize, GridView};
 use crate::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -66,6 +69,10 @@ pub struct Job {
     pub effect_samples: SampleOverrides,
     /// Render the grey ambient-occlusion image instead of the shaded one.
     pub ao_image: bool,
+    /// Render the uniform grid's occupied cells instead of the scene
+    /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
+    /// the one `build.accel` asks for, if it is a grid.
+    pub visualize_grid: Option<GridView>,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -131,7 +138,11 @@ impl JobError {
     /// The process exit status for this error: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
-            JobError::Parse(_) | JobError::Usage(_) => 2,
+            // A request that names no writable image is the user's to fix;
+            // checked before any work.
+            JobError::Parse(_)
+            | JobError::Usage(_)
+            | JobError::Output(OutputError::Format { .. } | OutputError::NoDir { .. }) => 2,
             JobError::Output(_) | JobError::Internal(_) => 1,
             JobError::Interrupted(_) => 130,
         }
@@ -157,6 +168,8 @@ pub struct Report {
     pub render: Duration,
     /// Number of primitives in the world.
     pub primitives: usize,
+    /// Bounds of the world's bounded primitives (planes excluded).
+    pub bounds: crate::math::Aabb,
     /// The rendered planes.
     pub frame: Frame,
     /// The sampling settings rendered with.
@@ -164,6 +177,19 @@ pub struct Report {
 }
 
 impl Job {
+    /// Every image file this job will write (colour, depth, normals).
+    pub fn image_paths(&self) -> impl Iterator<Item = &Path> {
+        let depth = self.depth.as_ref().map(|(_, _, p)| p.as_path());
+        self.output
+            .as_deref()
+            .into_iter()
+            .chain(depth)
+            .chain(self.normals.as_deref())
+            .chain(self.samples_view.as_ref().map(|(p, _)| p.as_path()))
+            .chain(self.filter_view.as_ref().map(|(p, _)| p.as_path()))
+            .chain(self.samples_image.as_deref())
+    }
+
     /// A job with the course's defaults (no outputs yet).
     pub fn new(input: PathBuf, width: u32, height: u32) -> Self {
         Self {
@@ -188,6 +214,7 @@ impl Job {
             stats_json: None,
             effect_samples: SampleOverrides::default(),
             ao_image: false,
+            visualize_grid: None,
         }
     }
 
@@ -244,9 +271,26 @@ impl Job {
             )));
         }
         check_frame_memory(self.width, self.height, available_memory())?;
+        for path in self.image_paths() {
+            check_path(path)?;
+        }
         let t_load = Instant::now();
         let scene = load_scene(&self.input)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+        let mut voxels = None;
+        let scene = match self.visualize_grid {
+            Some(view) => {
+                let res = match self.build.accel {
+                    AccelKind::Grid { res } => res,
+                    _ => None,
+                };
+                let v = voxelize(&World::build(&scene, self.build), res);
+                let cells = v.scene(&scene, view);
+                voxels = Some((v, view));
+                cells
+            }
+            None => scene,
+        };
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
@@ -295,6 +339,13 @@ impl Job {
         let render_time = start.elapsed();
         if let Some(b) = bar {
             b.finish_and_clear();
+        }
+        let mut frame = frame;
+        if let Some((v, GridView::Count)) = &voxels {
+            let mut canvas =
+                Canvas::new(frame.width, frame.height, std::mem::take(&mut frame.color));
+            legend(&mut canvas, v.max_count());
+            frame.color = canvas.pixels;
         }
         let complete = frame.is_complete();
         let (w, h) = (self.width, self.height);
@@ -346,6 +397,7 @@ impl Job {
             world_ms,
             render: render_time,
             primitives: world.prims.len(),
+            bounds: world.bounds(),
             frame,
             settings,
         };
@@ -628,6 +680,76 @@ pub fn run_guarded(
         Ok(code) => code,
         Err(_) => std::process::ExitCode::from(1),
     }
+}
+
+/// The course's statistics report (`raytracing_stats.C`, NOTES.md A6), for
+/// `raytracer -stats`: time, pixels, scene bounds, grid cells, rays by kind,
+/// intersections, cells traversed and the per-ray figures, which count
+/// non-shadow plus shadow rays. `glint --stats` and `--stats-json` keep the
+/// full counters.
+pub fn course_stats_text(report: &Report) -> String {
+    // The grid's resolution, from its description (`grid 10x10x7`).
+    let grid: Option<[u32; 3]> = report.accel.strip_prefix("grid ").and_then(|r| {
+        let v: Vec<u32> = r.split('x').filter_map(|n| n.trim().parse().ok()).collect();
+        <[u32; 3]>::try_from(v).ok()
+    });
+    let bounds = Some(report.bounds);
+    let st = report.stats();
+    let secs = report.render.as_secs_f64();
+    let whole = secs as u64;
+    let pixels = u64::from(st.width) * u64::from(st.height);
+    let rays = st.rays_total.max(1) as f64;
+    let non_shadow = st.rays_total - st.rays_shadow;
+    let mut s =
+        String::from("********************************************\nRAY TRACING STATISTICS\n");
+    let mut line = |k: &str, v: String| s.push_str(&format!("  {k:<27}{v}\n"));
+    line(
+        "total time",
+        format!("{}:{:02}:{:02}", whole / 3600, whole / 60 % 60, whole % 60),
+    );
+    line(
+        "num pixels",
+        format!("{pixels} ({}x{})", st.width, st.height),
+    );
+    line(
+        "scene bounds",
+        match bounds.filter(|b| !b.is_empty()) {
+            Some(b) => format!(
+                "({:.4}, {:.4}, {:.4}) -> ({:.4}, {:.4}, {:.4})",
+                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line(
+        "num grid cells",
+        match grid {
+            Some([x, y, z]) => format!(
+                "{} ({x}x{y}x{z})",
+                u64::from(x) * u64::from(y) * u64::from(z)
+            ),
+            None => "NULL".into(),
+        },
+    );
+    line("num non-shadow rays", non_shadow.to_string());
+    line("num shadow rays", st.rays_shadow.to_string());
+    line("total intersections", st.intersection_tests.to_string());
+    line("total cells traversed", st.nodes_visited.to_string());
+    line("rays per second", format!("{:.1}", rays / secs.max(1e-9)));
+    line(
+        "rays per pixel",
+        format!("{:.3}", rays / pixels.max(1) as f64),
+    );
+    line(
+        "intersections per ray",
+        format!("{:.3}", st.intersection_tests as f64 / rays),
+    );
+    line(
+        "cells traversed per ray",
+        format!("{:.3}", st.nodes_visited as f64 / rays),
+    );
+    s.push_str("********************************************\n");
+    s
 }
 
 #[cfg(test)]

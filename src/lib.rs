@@ -12,4 +12,7 @@ pub mod render;
 pub mod scene;
 pub mod shape;
 pub mod stats;
+#[cfg(test)]
+pub(crate) mod testdata;
+pub mod viz;
 pub mod world;

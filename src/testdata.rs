@@ -17,7 +17,10 @@ use std::path::{Path, PathBuf};
 pub fn shared_root() -> PathBuf {
     match std::env::var_os("GLINT_SHARED") {
         Some(p) if !p.is_empty() => PathBuf::from(p),
-        _ => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"),
+        _ => {
+            let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+            repo.parent().unwrap_or(repo).join("shared")
+        }
     }
 }
 

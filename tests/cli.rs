@@ -14,6 +14,11 @@ fn raytracer(args: &[&str], dir: &Path) -> std::process::Output {
         .unwrap()
 }
 
+/// One of glint's own scenes, as an absolute path.
+fn own(name: &str) -> String {
+    own_scene(name).to_string_lossy().into_owned()
+}
+
 fn abs(p: &str) -> String {
     std::fs::canonicalize(p)
         .unwrap()
@@ -71,7 +76,7 @@ fn glint_render_reports_bad_input_with_status_2() {
 #[test]
 fn unknown_flag_is_named_and_preview_flags_are_ignored() {
     let dir = scratch("flags");
-    let scene = abs(&format!("{SCENES}/scene1_01.txt"));
+    let scene = own("whitted.txt");
     let out = raytracer(&["-input", &scene, "-frobnicate"], &dir);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("-frobnicate"));
@@ -100,29 +105,12 @@ fn unknown_flag_is_named_and_preview_flags_are_ignored() {
     assert!(dir.join("a.png").exists());
 }
 
+/// A folder that does not exist is named, before any work (the formats
+/// themselves are checked in `tests/formats.rs`).
 #[test]
-fn every_output_format_by_extension() {
+fn missing_output_folder_is_named() {
     let dir = scratch("formats");
-    let scene = abs(&format!("{SCENES}/scene2_01_diffuse.txt"));
-    for ext in ["png", "tga", "ppm", "bmp"] {
-        let name = format!("out.{ext}");
-        let out = raytracer(
-            &["-input", &scene, "-size", "40", "30", "-output", &name],
-            &dir,
-        );
-        assert!(
-            out.status.success(),
-            "{ext}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let img = image::open(dir.join(&name)).unwrap();
-        assert_eq!((img.width(), img.height()), (40, 30), "{ext}");
-    }
-    let out = raytracer(
-        &["-input", &scene, "-size", "4", "4", "-output", "out.xyz"],
-        &dir,
-    );
-    assert_eq!(out.status.code(), Some(1));
+    let scene = own("whitted.txt");
     let out = raytracer(
         &[
             "-input",
@@ -135,19 +123,66 @@ fn every_output_format_by_extension() {
         ],
         &dir,
     );
+    assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("does not exist"));
+}
+
+/// `raytracer -help` lists every flag, one line each, and exits 0; a missing
+/// value names its flag and exits 2.
+#[test]
+fn raytracer_help_and_missing_values() {
+    for h in ["-help", "--help", "-h"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+            .arg(h)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{h}");
+        let text = String::from_utf8_lossy(&out.stdout);
+        for flag in [
+            "-input", "-output", "-size", "-shadows", "-bounces", "-weight", "-grid",
+        ] {
+            assert!(text.contains(flag), "{h}: {flag} missing from {text}");
+        }
+    }
+    let dir = scratch("missing-value");
+    for (args, flag) in [
+        (&["-input"][..], "-input"),
+        (&["-input", "a.txt", "-size", "20"][..], "-size"),
+        (&["-input", "a.txt", "-bounces"][..], "-bounces"),
+    ] {
+        let out = raytracer(args, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(flag), "{args:?}: {err}");
+    }
+}
+
+/// File-level errors show the whole path as given and no `:0:0:` position.
+#[test]
+fn missing_scene_path_is_shown_in_full() {
+    let dir = scratch("long-path");
+    let long = dir.join("a-folder-name-long-enough-to-have-been-cut-before/and/the/scene.txt");
+    let out = raytracer(
+        &["-input", &long.to_string_lossy(), "-output", "x.png"],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains(&*long.to_string_lossy()), "{err}");
+    assert!(!err.contains(":0:0"), "{err}");
+    assert!(err.contains("No such file or directory"), "{err}");
 }
 
 #[test]
 fn glint_info_counts_the_scene() {
-    let scene = abs(&format!("{SCENES}/scene6_07_bunny_mesh_40k.txt"));
+    let scene = own("mesh_knot_16k.txt");
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
         .args(["info", &scene])
         .output()
         .unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("40000 triangles"), "{text}");
+    assert!(text.contains("16384 triangles"), "{text}");
     assert!(text.contains("bounds"), "{text}");
 }
 
@@ -155,21 +190,40 @@ fn glint_info_counts_the_scene() {
 /// and no pixel is NaN or infinite.
 #[test]
 fn every_shared_scene_renders_with_finite_pixels() {
-    use glint::job::Job;
-    let mut names: Vec<_> = std::fs::read_dir(SCENES)
+    let Some(scenes) = scenes("every_shared_scene_renders_with_finite_pixels") else {
+        return;
+    };
+    let names = scene_files(&scenes, "scene");
+    assert!(names.len() >= 90, "only {} scenes found", names.len());
+    renders_finite(names);
+}
+
+/// Every one of glint's own example scenes renders, with finite pixels.
+#[test]
+fn every_own_scene_renders_with_finite_pixels() {
+    let names = scene_files(&own_scene(""), "");
+    assert!(names.len() >= 8, "only {} scenes found", names.len());
+    renders_finite(names);
+}
+
+/// The `.txt` scene files of `dir` whose names start with `prefix`, sorted.
+fn scene_files(dir: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
+    let mut names: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| {
             let p = e.unwrap().path();
             (p.extension().is_some_and(|x| x == "txt")
-                && p.file_name()
-                    .unwrap()
-                    .to_string_lossy()
-                    .starts_with("scene"))
+                && p.file_name().unwrap().to_string_lossy().starts_with(prefix))
             .then_some(p)
         })
         .collect();
     names.sort();
-    assert!(names.len() >= 90, "only {} scenes found", names.len());
+    names
+}
+
+/// Renders each scene small with every Whitted feature on; no pixel may be NaN or infinite.
+fn renders_finite(names: Vec<std::path::PathBuf>) {
+    use glint::job::Job;
     for path in names {
         let mut job = Job::new(path.clone(), 24, 24);
         job.integrator.shadows = true;
@@ -194,7 +248,7 @@ fn sigint_saves_a_partial_image_and_keeps_the_original() {
     let dir = scratch("sigint");
     let original = b"not really a png, but precious".to_vec();
     std::fs::write(dir.join("out.png"), &original).unwrap();
-    let scene = abs(&format!("{SCENES}/scene4_14_faceted_gem.txt"));
+    let scene = own("whitted.txt");
     // Big enough to run for many seconds on any machine.
     let child = Command::new(env!("CARGO_BIN_EXE_raytracer"))
         .args([
@@ -226,13 +280,12 @@ fn sigint_saves_a_partial_image_and_keeps_the_original() {
     assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), original);
     let partial = image::open(dir.join("out.partial.png")).unwrap();
     assert_eq!((partial.width(), partial.height()), (3000, 3000));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn glint_renders_a_bare_obj() {
     let dir = scratch("obj");
-    let mesh = abs(&format!("{SCENES}/bunny_200.obj"));
+    let mesh = own("meshes/knot_1k.obj");
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
         .args([
             "render",
@@ -263,7 +316,7 @@ fn glint_renders_a_bare_obj() {
 #[test]
 fn zero_and_huge_sizes_are_refused_up_front() {
     let dir = scratch("sizes");
-    let scene = abs(&format!("{SCENES}/scene1_01.txt"));
+    let scene = own("whitted.txt");
     let out = raytracer(
         &["-input", &scene, "-size", "0", "0", "-output", "z.png"],
         &dir,
@@ -299,7 +352,7 @@ fn zero_and_huge_sizes_are_refused_up_front() {
 #[test]
 fn hdr_outputs_by_extension() {
     let dir = scratch("hdr-cli");
-    let scene = abs(&format!("{SCENES}/scene2_01_diffuse.txt"));
+    let scene = own("whitted.txt");
     for name in ["out.exr", "out.pfm"] {
         let out = raytracer(
             &["-input", &scene, "-size", "40", "30", "-output", name],

@@ -143,18 +143,18 @@ fn hdr_writes_replace_atomically_and_leave_no_temporary_file() {
 #[test]
 fn rendered_frame_is_written_unclamped() {
     let dir = scratch("hdr-render");
-    let scene = Path::new("../shared/scenes/6837/scene4_14_faceted_gem.txt");
-    let mut job = glint::job::Job::new(scene.into(), 24, 16);
+    let scene = common::own_scene("whitted.txt");
+    let mut job = glint::job::Job::new(scene, 24, 16);
     job.integrator.shadows = true;
     job.integrator.bounces = 3;
     job.integrator.shade_back = true;
-    job.output = Some(dir.join("gem.pfm"));
+    job.output = Some(dir.join("whitted.pfm"));
     let report = job.run().unwrap();
-    let (_, _, pfm) = read_pfm(&dir.join("gem.pfm"));
+    let (_, _, pfm) = read_pfm(&dir.join("whitted.pfm"));
     assert_eq!(pfm, report.frame.color);
-    job.output = Some(dir.join("gem.exr"));
+    job.output = Some(dir.join("whitted.exr"));
     let report = job.run().unwrap();
-    let (_, _, exr) = read_exr(&dir.join("gem.exr"));
+    let (_, _, exr) = read_exr(&dir.join("whitted.exr"));
     assert_eq!(exr, report.frame.color);
     assert!(report.frame.color.iter().any(|c| c.max_element() > 1.0));
 }

@@ -477,8 +477,8 @@ fn unreadable_scene_file_says_so() {
 
 /// A small but complete scene to mutate.
 fn seed_scene() -> String {
-    std::fs::read_to_string("../shared/scenes/6837/scene4_14_faceted_gem.txt")
-        .unwrap_or_else(|_| std::fs::read_to_string(fixture("too_few_objects.txt")).unwrap())
+    let whitted = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.txt");
+    std::fs::read_to_string(whitted).expect("scenes/whitted.txt")
 }
 
 proptest! {
@@ -493,7 +493,7 @@ proptest! {
         let mut end = (start + len).min(src.len());
         while !src.is_char_boundary(end) { end -= 1; }
         let edited = format!("{}{}{}", &src[..start], insert, &src[end..]);
-        let _ = parse_scene(&edited, Path::new("../shared/scenes/6837/x.txt"));
+        let _ = parse_scene(&edited, Path::new("scenes/x.txt"));
     }
 
     /// Arbitrary text never panics either, and errors point inside the text.

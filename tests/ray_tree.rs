@@ -2,7 +2,6 @@
 //! no self-intersection acne, the bounce and weight limits, shadows.
 
 mod common;
-use common::SCENES;
 use glint::format::load_scene;
 use glint::integrator::{NoObserver, RayKind, RayRecorder, Whitted};
 use glint::math::{offset_origin, Ray, Vec2, Vec3};
@@ -30,21 +29,35 @@ impl Rng {
     }
 }
 
-/// From random eye-ray hits on shared scenes (meshes, spheres, planes, under
-/// transforms), rays leaving the surface on either side never re-hit the same
-/// primitive immediately (which is what shadow/reflection acne is).
+/// From random eye-ray hits on glint's own scenes and the course's (meshes,
+/// spheres, planes, under transforms), rays leaving the surface on either side
+/// never re-hit the same primitive immediately (which is what shadow/reflection
+/// acne is). The course's scenes are added when the data folder is present.
 #[test]
 fn secondary_rays_never_rehit_their_own_surface() {
     let mut rng = Rng(0x9e3779b97f4a7c15);
     let mut checked = 0;
-    for name in [
-        "scene4_14_faceted_gem.txt",
-        "scene2_13_rotated_squashed_sphere.txt",
-        "scene4_06_transparent_bars.txt",
-        "scene6_07_bunny_mesh_40k.txt",
-        "scene4_03_mirrored_floor.txt",
-    ] {
-        let scene = load_scene(&std::path::Path::new(SCENES).join(name)).unwrap();
+    let mut paths = vec![
+        common::own_scene("whitted.txt"),
+        common::own_scene("mesh_knot_1k.txt"),
+    ];
+    if let Some(dir) =
+        common::scenes("secondary_rays_never_rehit_their_own_surface (course scenes)")
+    {
+        paths.extend(
+            [
+                "scene4_14_faceted_gem.txt",
+                "scene2_13_rotated_squashed_sphere.txt",
+                "scene4_06_transparent_bars.txt",
+                "scene6_07_bunny_mesh_40k.txt",
+                "scene4_03_mirrored_floor.txt",
+            ]
+            .map(|n| dir.join(n)),
+        );
+    }
+    for path in &paths {
+        let name = path.display();
+        let scene = load_scene(path).unwrap();
         let world = World::build(&scene, BuildOptions::default());
         let cam = CameraModel::new(&scene.camera);
         let mut c = Counters::default();
@@ -72,7 +85,7 @@ fn secondary_rays_never_rehit_their_own_surface() {
             }
         }
     }
-    assert!(checked > 5000, "only {checked} rays checked");
+    assert!(checked > 2000 * paths.len(), "only {checked} rays checked");
 }
 
 fn sphere(center: Vec3, radius: f32, material: usize) -> Node {

@@ -60,23 +60,25 @@ const MAX_FRAC_OFF: f64 = 0.02;
 
 /// Every image-writing line of `file` except textured scenes (checked by
 /// [`check_outputs`] and `tests/textures.rs`) and grid visualizations.
-fn plain_lines(file: &str) -> Vec<CmdLine> {
-    command_lines(file)
+fn plain_lines(data: &CourseData, file: &str) -> Vec<CmdLine> {
+    command_lines(&data.scenes, file)
         .into_iter()
-        .filter(|l| !textured_or_visualization(l))
+        .filter(|l| !textured_or_visualization(&data.scenes, l))
         .collect()
 }
 
-fn check_assignment(file: &str) {
-    check_lines(file, plain_lines(file));
+fn check_assignment(test: &str, file: &str) {
+    let Some(data) = course_data(test) else {
+        return;
+    };
+    check_lines(&data, file, plain_lines(&data, file));
 }
 
 /// Whether a command line's scene uses solid textures or asks for a grid
 /// visualization (not a render to compare).
-fn textured_or_visualization(line: &CmdLine) -> bool {
+fn textured_or_visualization(scenes: &std::path::Path, line: &CmdLine) -> bool {
     let scene = flag_value(&line.args, "-input").unwrap_or_default();
-    let text =
-        std::fs::read_to_string(std::path::Path::new(SCENES).join(scene)).unwrap_or_default();
+    let text = std::fs::read_to_string(scenes.join(scene)).unwrap_or_default();
     line.args.iter().any(|a| a.starts_with("-visualize_grid"))
         || ["Checkerboard", "Noise", "Marble", "Wood"]
             .iter()
@@ -84,19 +86,25 @@ fn textured_or_visualization(line: &CmdLine) -> bool {
 }
 
 /// The lines of `file` that write one of `outputs`, exactly as written.
-fn check_outputs(file: &str, outputs: &[&str]) {
-    let lines = outputs.iter().map(|o| line_for(file, o)).collect();
-    check_lines(&format!("{file}-{}", outputs.join("-")), lines);
+fn check_outputs(test: &str, file: &str, outputs: &[&str]) {
+    let Some(data) = course_data(test) else {
+        return;
+    };
+    let lines = outputs
+        .iter()
+        .map(|o| line_for(&data.scenes, file, o))
+        .collect();
+    check_lines(&data, &format!("{file}-{}", outputs.join("-")), lines);
 }
 
 /// Runs `lines` in a scratch folder named after `tag` and compares every
 /// image; returns how many matched, panics listing the mismatches.
-fn check_lines(tag: &str, lines: Vec<CmdLine>) -> usize {
+fn check_lines(data: &CourseData, tag: &str, lines: Vec<CmdLine>) -> usize {
     let dir = scratch(tag);
     let mut failures = Vec::new();
     let mut checked = 0;
     for line in lines {
-        if let Err(e) = run_raytracer(&line.args, &dir) {
+        if let Err(e) = run_raytracer(&data.scenes, &line.args, &dir) {
             failures.push(format!("{}\n    failed to run: {e}", line.text));
             continue;
         }
@@ -105,7 +113,7 @@ fn check_lines(tag: &str, lines: Vec<CmdLine>) -> usize {
                 .iter()
                 .find(|e| e.0 == name)
                 .map_or((MAX_MEAN_ABS, MAX_FRAC_OFF), |e| (e.1, e.2));
-            match diff(&dir.join(name), &reference_for(name)) {
+            match diff(&dir.join(name), &reference_for(&data.refs, name)) {
                 Ok(d) if d.mean_abs <= max_mean && d.frac_off <= max_off => checked += 1,
                 Ok(d) => failures.push(format!(
                     "{name}: mean abs {:.2} (max {max_mean}), {:.2}% pixels off (max {:.1}%)",
@@ -117,7 +125,6 @@ fn check_lines(tag: &str, lines: Vec<CmdLine>) -> usize {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(
         failures.is_empty(),
         "{} images matched; mismatches:\n{}",
@@ -130,22 +137,22 @@ fn check_lines(tag: &str, lines: Vec<CmdLine>) -> usize {
 
 #[test]
 fn assignment1_ray_casting() {
-    check_assignment("A1_cmd.txt");
+    check_assignment("assignment1_ray_casting", "A1_cmd.txt");
 }
 
 #[test]
 fn assignment2_transforms_and_perspective() {
-    check_assignment("A2_cmd.txt");
+    check_assignment("assignment2_transforms_and_perspective", "A2_cmd.txt");
 }
 
 #[test]
 fn assignment3_phong() {
-    check_assignment("A3_cmd.txt");
+    check_assignment("assignment3_phong", "A3_cmd.txt");
 }
 
 #[test]
 fn assignment4_shadows_reflection_refraction() {
-    check_assignment("A4_cmd.txt");
+    check_assignment("assignment4_shadows_reflection_refraction", "A4_cmd.txt");
 }
 
 /// The deterministic textured lines of assignment 6 (one ray per pixel; the
@@ -156,14 +163,22 @@ fn assignment4_shadows_reflection_refraction() {
 /// (see `EXCEPTIONS`) are reproduced.
 #[test]
 fn assignment6_checkerboard_textures() {
-    check_outputs("A6_cmd.txt", &["output6_13.tga", "output6_14.tga"]);
+    check_outputs(
+        "assignment6_checkerboard_textures",
+        "A6_cmd.txt",
+        &["output6_13.tga", "output6_14.tga"],
+    );
 }
 
 /// Assignment 7's checkerboard scenes rendered with one ray per pixel (the
 /// sampling and filtering lines need flags `raytracer` does not have yet).
 #[test]
 fn assignment7_checkerboard_textures() {
-    check_outputs("A7_cmd.txt", &["output7_02.tga", "output7_05a.tga"]);
+    check_outputs(
+        "assignment7_checkerboard_textures",
+        "A7_cmd.txt",
+        &["output7_02.tga", "output7_05a.tga"],
+    );
 }
 
 /// Assignment 6's untextured renders (bunnies up to 40k triangles,
@@ -172,6 +187,9 @@ fn assignment7_checkerboard_textures() {
 /// resolution); lines without `-grid` run the grid at its automatic resolution.
 #[test]
 fn assignment6_with_every_accelerator() {
+    let Some(data) = course_data("assignment6_with_every_accelerator") else {
+        return;
+    };
     for accel in [
         "none",
         "grid",
@@ -180,14 +198,14 @@ fn assignment6_with_every_accelerator() {
         "bvh-median",
         "bvh-midpoint",
     ] {
-        let lines = plain_lines("A6_cmd.txt")
+        let lines = plain_lines(&data, "A6_cmd.txt")
             .into_iter()
             .map(|mut l| {
                 l.args.extend(["-accel".to_string(), accel.to_string()]);
                 l
             })
             .collect();
-        let n = check_lines(&format!("A6-{accel}"), lines);
+        let n = check_lines(&data, &format!("A6-{accel}"), lines);
         assert!(n >= 20, "{accel}: only {n} images checked");
     }
 }
@@ -197,7 +215,10 @@ fn assignment6_with_every_accelerator() {
 /// notices if the command file changes.
 #[test]
 fn assignment5_has_only_visualizations() {
-    assert!(command_lines("A5_cmd.txt")
+    let Some(scenes) = scenes("assignment5_has_only_visualizations") else {
+        return;
+    };
+    assert!(command_lines(&scenes, "A5_cmd.txt")
         .iter()
-        .all(textured_or_visualization));
+        .all(|l| textured_or_visualization(&scenes, l)));
 }

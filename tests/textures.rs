@@ -161,9 +161,13 @@ fn trace_points(scene: &Scene, integrator: &Whitted, (w, h): (u32, u32), step: u
 
 /// The command line's render with the reference's quirks, at every
 /// `step`-th pixel; returns ours and the reference's pixels at those points.
-fn render_like_reference(line: &CmdLine, step: u32) -> (Vec<[u8; 3]>, Vec<[u8; 3]>) {
+fn render_like_reference(
+    data: &CourseData,
+    line: &CmdLine,
+    step: u32,
+) -> (Vec<[u8; 3]>, Vec<[u8; 3]>) {
     let input = flag_value(&line.args, "-input").expect("-input");
-    let scene = load_scene(&Path::new(SCENES).join(input)).expect("scene");
+    let scene = load_scene(&data.scenes.join(input)).expect("scene");
     let integrator = integrator_for(&line.args);
     let size = size_for(&line.args);
     let (lit, ambient) = reference_quirks(&scene);
@@ -178,7 +182,7 @@ fn render_like_reference(line: &CmdLine, step: u32) -> (Vec<[u8; 3]>, Vec<[u8; 3
         })
         .collect();
 
-    let (w, h, px) = load_rgb8(&reference_for(&line.outputs[0])).unwrap();
+    let (w, h, px) = load_rgb8(&reference_for(&data.refs, &line.outputs[0])).unwrap();
     assert_eq!((w, h), size, "reference size");
     let reference = (0..h)
         .step_by(step as usize)
@@ -202,6 +206,11 @@ fn fmt3(v: [f64; 3]) -> String {
 /// differences explained, are in `tests/reference_images.rs`).
 #[test]
 fn checkerboards_match_the_reference_once_its_quirks_are_reproduced() {
+    let Some(data) =
+        course_data("checkerboards_match_the_reference_once_its_quirks_are_reproduced")
+    else {
+        return;
+    };
     let mut failures = Vec::new();
     for (file, out) in [
         ("A6_cmd.txt", "output6_13.tga"),
@@ -209,7 +218,7 @@ fn checkerboards_match_the_reference_once_its_quirks_are_reproduced() {
         ("A7_cmd.txt", "output7_02.tga"),
         ("A7_cmd.txt", "output7_05a.tga"),
     ] {
-        let (ours, reference) = render_like_reference(&line_for(file, out), 1);
+        let (ours, reference) = render_like_reference(&data, &line_for(&data.scenes, file, out), 1);
         let d = diff_pixels(&ours, &reference);
         eprintln!(
             "{out}: mean abs {:.3}, {:.2}% off",
@@ -234,9 +243,13 @@ fn checkerboards_match_the_reference_once_its_quirks_are_reproduced() {
 /// twice: on the literal render, a mean error of 18.2/255 against 3.7).
 #[test]
 fn noise_and_marble_match_the_reference_pixel_for_pixel() {
+    let Some(data) = course_data("noise_and_marble_match_the_reference_pixel_for_pixel") else {
+        return;
+    };
     let mut failures = Vec::new();
     for out in ["output6_15.tga", "output6_17a.tga"] {
-        let (ours, reference) = render_like_reference(&line_for("A6_cmd.txt", out), 1);
+        let (ours, reference) =
+            render_like_reference(&data, &line_for(&data.scenes, "A6_cmd.txt", out), 1);
         let d = diff_pixels(&ours, &reference);
         eprintln!(
             "{out}: mean abs {:.3}, {:.2}% off",
@@ -270,20 +283,23 @@ fn noise_marble_wood_mean_colour_of_the_command_lines() {
         ("A6_cmd.txt", "output6_17a.tga", 0.25),
         ("A7_cmd.txt", "output7_03a.tga", 0.25),
     ];
+    let Some(data) = course_data("noise_marble_wood_mean_colour_of_the_command_lines") else {
+        return;
+    };
     let dir = scratch("textures-mean-colour");
     let mut failures = Vec::new();
     for &(file, out, max_rel) in cases {
-        let line = line_for(file, out);
-        run_raytracer(&line.args, &dir).unwrap_or_else(|e| panic!("{}: {e}", line.text));
+        let line = line_for(&data.scenes, file, out);
+        run_raytracer(&data.scenes, &line.args, &dir)
+            .unwrap_or_else(|e| panic!("{}: {e}", line.text));
         let (_, _, ours) = load_rgb8(&dir.join(out)).unwrap();
-        let (_, _, reference) = load_rgb8(&reference_for(out)).unwrap();
+        let (_, _, reference) = load_rgb8(&reference_for(&data.refs, out)).unwrap();
         let rel = relative_mean_diff(mean_rgb(&ours), mean_rgb(&reference));
         eprintln!("{out}: mean colour {} off the reference", fmt3(rel));
         if rel.iter().any(|r| r.abs() > max_rel) {
             failures.push(format!("{out}: {} (max ±{}%)", fmt3(rel), 100.0 * max_rel));
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
@@ -298,6 +314,9 @@ fn noise_marble_wood_mean_colour_of_the_command_lines() {
 /// test under a minute without an acceleration structure.
 #[test]
 fn noise_marble_wood_mean_colour_with_the_quirks_reproduced() {
+    let Some(data) = course_data("noise_marble_wood_mean_colour_with_the_quirks_reproduced") else {
+        return;
+    };
     let cases: &[(&str, &str, u32)] = &[
         ("A6_cmd.txt", "output6_15.tga", 1),
         ("A6_cmd.txt", "output6_16.tga", 1),
@@ -307,7 +326,8 @@ fn noise_marble_wood_mean_colour_with_the_quirks_reproduced() {
     ];
     let mut failures = Vec::new();
     for &(file, out, step) in cases {
-        let (ours, reference) = render_like_reference(&line_for(file, out), step);
+        let (ours, reference) =
+            render_like_reference(&data, &line_for(&data.scenes, file, out), step);
         let rel = relative_mean_diff(mean_rgb(&ours), mean_rgb(&reference));
         eprintln!("{out}: mean colour {} off the reference", fmt3(rel));
         if rel.iter().any(|r| r.abs() > MAX_MEAN_REL) {
@@ -316,8 +336,8 @@ fn noise_marble_wood_mean_colour_with_the_quirks_reproduced() {
         if out == "output6_18a.tga" {
             // scene7_04 is the same file rendered with the same flags, and
             // output7_04a is byte-identical to output6_18a: no second render.
-            let (w, h, a) = load_rgb8(&reference_for("output7_04a.tga")).unwrap();
-            let (_, _, b) = load_rgb8(&reference_for(out)).unwrap();
+            let (w, h, a) = load_rgb8(&reference_for(&data.refs, "output7_04a.tga")).unwrap();
+            let (_, _, b) = load_rgb8(&reference_for(&data.refs, out)).unwrap();
             assert_eq!((w, h), (400, 200));
             assert!(a == b, "output7_04a no longer equals output6_18a");
         }
@@ -329,7 +349,7 @@ fn noise_marble_wood_mean_colour_with_the_quirks_reproduced() {
 #[test]
 fn documentation_examples_parse() {
     for t in ["checkerboard", "noise", "marble", "wood"] {
-        let path = Path::new("docs/scenes").join(format!("texture_{t}.txt"));
+        let path = own_scene(&format!("texture_{t}.txt"));
         let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
         assert!(
             matches!(scene.materials[2], Material::Texture { .. }),

@@ -33,7 +33,7 @@ mod mailbox;
 pub mod octree;
 mod overlap;
 #[cfg(test)]
-mod testutil;
+pub(crate) mod testutil;
 
 pub use brute::Brute;
 pub use bvh::Bvh;

@@ -5,6 +5,7 @@ use glint::accel::AccelKind;
 use glint::job::Job;
 use glint::material::TextureSpace;
 use glint::render::{Adaptive, Filter, GridLayout, PixelOffset, Sampler, SamplerKind};
+use glint::viz::grid::GridView;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -13,8 +14,172 @@ fn main() -> ExitCode {
     glint::job::run_guarded("raytracer", real_main)
 }
 
+/// Every flag, its arguments and one line of help, in the order `-help` prints them.
+const FLAGS: &[(&str, &str, &str)] = &[
+    (
+        "-input",
+        "FILE",
+        "scene file (MIT 6.837 format) or a bare .obj mesh",
+    ),
+    (
+        "-output",
+        "FILE",
+        "colour image: .png .tga .ppm .bmp (8-bit) or .exr .pfm (float)",
+    ),
+    ("-size", "W H", "image size in pixels (default 100 100)"),
+    ("-depth", "T0 T1 FILE", "depth image: t0 white, t1 black"),
+    ("-normals", "FILE", "normals image: |x| |y| |z| as RGB"),
+    ("-shadows", "", "cast shadow rays"),
+    (
+        "-transparent_shadows",
+        "",
+        "filter light through transparent occluders (implies -shadows' rays)",
+    ),
+    (
+        "-shade_back",
+        "",
+        "light the back sides of surfaces (black otherwise)",
+    ),
+    (
+        "-bounces",
+        "N",
+        "maximum reflection/refraction depth (default 0)",
+    ),
+    (
+        "-weight",
+        "W",
+        "prune ray-tree branches contributing less than W (default 0)",
+    ),
+    ("-grid", "NX NY NZ", "use a uniform grid of this resolution"),
+    (
+        "-accel",
+        "NAME",
+        "none, grid, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint",
+    ),
+    (
+        "-no_flatten",
+        "",
+        "keep the transform hierarchy instead of baking it into world space",
+    ),
+    (
+        "-texture_space",
+        "world|object",
+        "where textures are looked up (default world)",
+    ),
+    (
+        "-stats",
+        "",
+        "print the course's statistics report (time, rays, intersections, cells)",
+    ),
+    ("-stats_json", "FILE", "write the statistics as JSON"),
+    ("-threads", "N", "worker threads (default: all cores)"),
+    ("-quiet", "", "no progress bar"),
+    (
+        "-gui",
+        "",
+        "accepted and ignored (the course's OpenGL preview)",
+    ),
+    (
+        "-tessellation",
+        "A B",
+        "accepted and ignored (the course's OpenGL preview)",
+    ),
+    (
+        "-gouraud",
+        "",
+        "accepted and ignored (the course's OpenGL preview)",
+    ),
+    (
+        "-visualize_grid",
+        "",
+        "render the grid's occupied cells as grey boxes (with -grid)",
+    ),
+    (
+        "-visualize_grid_count",
+        "",
+        "render the grid's cells coloured by primitive count, with a legend",
+    ),
+    (
+        "-uniform_samples",
+        "N",
+        "N samples per pixel on a regular grid",
+    ),
+    (
+        "-random_samples",
+        "N",
+        "N samples per pixel, uniformly random",
+    ),
+    (
+        "-jittered_samples",
+        "N",
+        "N samples per pixel, one per stratum",
+    ),
+    (
+        "-sobol_samples",
+        "N",
+        "N samples per pixel, Owen-scrambled Sobol",
+    ),
+    ("-seed", "S", "seed of the random samplers (default 0)"),
+    ("-box_filter", "R", "box reconstruction filter of radius R"),
+    (
+        "-tent_filter",
+        "R",
+        "tent reconstruction filter of radius R",
+    ),
+    (
+        "-gaussian_filter",
+        "SIGMA",
+        "Gaussian reconstruction filter",
+    ),
+    (
+        "-render_samples",
+        "FILE ZOOM",
+        "the course's view of the sample positions",
+    ),
+    (
+        "-render_filter",
+        "FILE ZOOM",
+        "the course's view of the filter's weights",
+    ),
+    (
+        "-adaptive",
+        "T",
+        "Whitted's adaptive corner subdivision, threshold T",
+    ),
+    ("-max_depth", "D", "deepest subdivision of -adaptive"),
+    (
+        "-samples_image",
+        "FILE",
+        "heat map of rays per pixel, with a scale bar",
+    ),
+    ("-help", "", "print this help (also -h, --help)"),
+];
+
+/// The `-help` text: usage, then one line per flag.
+fn help() -> String {
+    let mut s = String::from(
+        "raytracer: the MIT 6.837 ray tracer's command line, verbatim\n\n\
+         usage: raytracer -input SCENE -output IMAGE [-size W H] [flags]\n\
+         e.g.:  raytracer -input scene4_14_faceted_gem.txt -size 200 200 -output out.tga -shadows -bounces 3 -weight 0.01\n\n\
+         Each pixel's eye ray goes through the pixel's lower-left corner (the course's convention;\n\
+         `glint render` uses the centre).\n\nflags:\n",
+    );
+    for (flag, args, text) in FLAGS {
+        let lhs = format!("{flag} {args}");
+        s.push_str(&format!("  {lhs:<30}{text}\n"));
+    }
+    s
+}
+
 fn real_main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args
+        .iter()
+        .any(|a| matches!(a.as_str(), "-help" | "-h" | "--help"))
+    {
+        print!("{}", help());
+        return ExitCode::SUCCESS;
+    }
     let (mut job, stats) = match parse(&args) {
         Ok(j) => j,
         Err(msg) => {
@@ -26,7 +191,7 @@ fn real_main() -> ExitCode {
     match job.run() {
         Ok(report) => {
             if stats {
-                print!("{}", report.stats_text());
+                print!("{}", glint::job::course_stats_text(&report));
             }
             ExitCode::SUCCESS
         }
@@ -99,6 +264,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 );
             }
             "-no_flatten" => job.build.flatten = false,
+            "-visualize_grid" => job.visualize_grid = Some(GridView::Occupied),
+            "-visualize_grid_count" => job.visualize_grid = Some(GridView::Count),
             "-texture_space" => {
                 job.integrator.texture_space = match value("world or object")?.as_str() {
                     "world" => TextureSpace::World,
@@ -168,7 +335,11 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                     }
                     ignored.push(*f);
                 }
-                None => return Err(format!("unknown flag '{other}'")),
+                None => {
+                    return Err(format!(
+                        "unknown flag '{other}' (raytracer -help lists every flag)"
+                    ))
+                }
             },
         }
     }
@@ -247,6 +418,39 @@ mod tests {
             .unwrap_err()
             .contains("kdtree"));
         assert!(parse(&args("-input a.txt -grid 0 1 1")).is_err());
+    }
+
+    /// Every flag `parse` accepts is in the help, and every flag in the help
+    /// is accepted: the help cannot drift from the parser.
+    #[test]
+    fn help_lists_every_flag_parse_accepts() {
+        let source = include_str!("raytracer.rs");
+        let parse_src =
+            &source[source.find("fn parse(").unwrap()..source.find("fn number<").unwrap()];
+        let mut accepted: Vec<&str> = parse_src
+            .split('"')
+            .filter(|t| {
+                t.starts_with('-')
+                    && t.len() > 1
+                    && t[1..].chars().all(|c| c.is_ascii_lowercase() || c == '_')
+            })
+            .collect();
+        accepted.extend(PREVIEW_ONLY.iter().map(|(f, _)| *f));
+        let text = help();
+        for flag in &accepted {
+            assert!(
+                text.lines()
+                    .any(|l| l.trim_start().split(' ').next() == Some(flag)),
+                "{flag} is accepted but not in -help"
+            );
+        }
+        for (flag, _, _) in FLAGS {
+            assert!(
+                *flag == "-help" || accepted.contains(flag),
+                "{flag} is in -help but not accepted"
+            );
+        }
+        assert!(accepted.len() >= 20, "{accepted:?}");
     }
 
     #[test]

@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 
 /// An error in a scene or mesh file, located at a 1-based line and column.
 ///
-/// `Display` gives the one-line form `file:line:col: expected X, found Y`;
+/// `Display` gives the one-line form `file:line:col: expected X, found Y`,
+/// with the file's path in full as it was given;
 /// [`ParseError::render`] adds the offending source line with a caret under it.
 /// Errors that have no position (the file cannot be read at all) use line 0,
-/// column 0.
+/// column 0, and are shown as `file: expected X, found Y`.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{}:{line}:{col}: expected {expected}, found {found}", file.display())]
 pub struct ParseError {
     /// The file the error is in (a mesh error names the OBJ file).
     pub file: PathBuf,
@@ -25,6 +25,16 @@ pub struct ParseError {
     pub found: String,
     /// The text of line `line`, when there is one.
     pub source_line: Option<String>,
+}
+
+impl std::fmt::Display for ParseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if self.line > 0 {
+            write!(f, ":{}:{}", self.line, self.col)?;
+        }
+        write!(f, ": expected {}, found {}", self.expected, self.found)
+    }
 }
 
 impl ParseError {
@@ -58,11 +68,8 @@ impl ParseError {
             line: 0,
             col: 0,
             expected: expected.to_owned(),
-            found: format!(
-                "{} ({})",
-                quote(&file.display().to_string()),
-                io_reason(err)
-            ),
+            // The path leads the message already, in full.
+            found: format!("a file that cannot be read ({})", io_reason(err)),
             source_line: None,
         }
     }
@@ -187,6 +194,20 @@ mod tests {
             sample().to_string(),
             "a.txt:2:2: expected an object, found 'Sphre'"
         );
+    }
+
+    #[test]
+    fn file_level_errors_have_no_position_and_the_full_path() {
+        let long = Path::new("/a/very/long/folder/name/that/goes/on/and/on/for/a/while/scene.txt");
+        let io = io::Error::from(io::ErrorKind::NotFound);
+        let e = ParseError::unreadable(long, &io, "a readable scene file");
+        let text = e.to_string();
+        assert!(
+            text.starts_with(&format!("{}: expected", long.display())),
+            "{text}"
+        );
+        assert!(!text.contains(":0:0"), "{text}");
+        assert_eq!(e.render(), format!("{text}\n"));
     }
 
     #[test]

@@ -30,6 +30,15 @@ pub trait RayObserver {
         weight: f32,
         normal: Option<Vec3>,
     );
+
+    /// An opaque shadow ray towards a light `distance` away was traced, and
+    /// `blocked` tells whether something lay in between. The default reports
+    /// it through [`RayObserver::ray`] with `t_end` = `distance`, or NaN when
+    /// blocked (an any-hit query does not say where).
+    fn shadow(&mut self, ray: &Ray, distance: f32, blocked: bool, depth: u32) {
+        let t_end = if blocked { f32::NAN } else { distance };
+        self.ray(RayKind::Shadow, ray, t_end, depth, 0.0, None);
+    }
 }
 
 /// Observes nothing.
@@ -38,6 +47,9 @@ pub struct NoObserver;
 impl RayObserver for NoObserver {
     #[inline(always)]
     fn ray(&mut self, _: RayKind, _: &Ray, _: f32, _: u32, _: f32, _: Option<Vec3>) {}
+
+    #[inline(always)]
+    fn shadow(&mut self, _: &Ray, _: f32, _: bool, _: u32) {}
 }
 
 /// One recorded ray.
@@ -47,8 +59,11 @@ pub struct RecordedRay {
     pub kind: RayKind,
     /// The ray.
     pub ray: Ray,
-    /// Where it ended (infinite: it escaped).
+    /// Where it ended (infinite: it escaped). For a shadow ray, the light's
+    /// distance, whether or not it got there (see `occluded`).
     pub t_end: f32,
+    /// A shadow ray that something blocked before the light.
+    pub occluded: bool,
     /// Recursion depth (0 = eye ray).
     pub depth: u32,
     /// Contribution weight.
@@ -78,9 +93,22 @@ impl RayObserver for RayRecorder {
             kind,
             ray: *ray,
             t_end,
+            occluded: false,
             depth,
             weight,
             normal,
+        });
+    }
+
+    fn shadow(&mut self, ray: &Ray, distance: f32, blocked: bool, depth: u32) {
+        self.rays.push(RecordedRay {
+            kind: RayKind::Shadow,
+            ray: *ray,
+            t_end: distance,
+            occluded: blocked,
+            depth,
+            weight: 0.0,
+            normal: None,
         });
     }
 }

@@ -335,14 +335,7 @@ impl Whitted {
         c.shadow += 1;
         if !self.transparent_shadows {
             let blocked = world.occluded(shadow, 0.0, distance, c);
-            obs.ray(
-                RayKind::Shadow,
-                shadow,
-                if blocked { f32::NAN } else { distance },
-                depth,
-                0.0,
-                None,
-            );
+            obs.shadow(shadow, distance, blocked, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut filter = Vec3::ONE;

@@ -1,6 +1,14 @@
-//! 8-bit images through the `image` crate.
+//! 8-bit images. PNG and BMP go through the `image` crate as they are; PPM
+//! through its PNM encoder with the binary `P6` subtype chosen explicitly (its
+//! default for `.ppm` is PAM, `P7`, which most PPM readers reject); TGA is
+//! written here, because the `image` crate's encoder writes run-length packets
+//! that cross scanlines (forbidden by TGA 2.0, and rejected by Pillow) and
+//! stores rows top-down, whereas the course's files are bottom-up.
 
 use crate::math::Vec3;
+use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
+use image::{ExtendedColorType, ImageEncoder};
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// 8-bit value of a linear channel: `int(c·255)` clamped to `[0, 255]`
@@ -21,10 +29,50 @@ pub(super) fn write(
         .iter()
         .flat_map(|p| p.to_array().map(to_byte))
         .collect();
-    let img = image::RgbImage::from_raw(width, height, bytes)
-        .ok_or("pixel count does not match the image size")?;
-    img.save_with_format(path, format)
-        .map_err(|e| e.to_string())
+    if bytes.len() as u64 != 3 * u64::from(width) * u64::from(height) {
+        return Err("pixel count does not match the image size".into());
+    }
+    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    let mut out = BufWriter::new(file);
+    match format {
+        image::ImageFormat::Tga => write_tga(&mut out, width, height, &bytes),
+        image::ImageFormat::Pnm => PnmEncoder::new(&mut out)
+            .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
+            .write_image(&bytes, width, height, ExtendedColorType::Rgb8)
+            .map_err(|e| e.to_string()),
+        f => image::RgbImage::from_raw(width, height, bytes)
+            .ok_or_else(|| "pixel count does not match the image size".to_string())?
+            .write_to(&mut out, f)
+            .map_err(|e| e.to_string()),
+    }?;
+    out.flush().map_err(|e| e.to_string())
+}
+
+/// TGA 2.0 type 2 (uncompressed true colour), 24 bits per pixel, BGR order,
+/// origin at the bottom left (descriptor 0): the layout of the course's
+/// `SaveTGA`, which every reader opens. `rgb` is top row first.
+fn write_tga(out: &mut impl Write, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
+    let (w, h) = (
+        u16::try_from(width)
+            .map_err(|_| format!("TGA images are at most 65535 wide, not {width}"))?,
+        u16::try_from(height)
+            .map_err(|_| format!("TGA images are at most 65535 high, not {height}"))?,
+    );
+    let mut header = [0u8; 18];
+    header[2] = 2; // uncompressed true colour
+    header[12..14].copy_from_slice(&w.to_le_bytes());
+    header[14..16].copy_from_slice(&h.to_le_bytes());
+    header[16] = 24; // bits per pixel
+    out.write_all(&header).map_err(|e| e.to_string())?;
+    let row_len = 3 * width as usize;
+    let mut row = vec![0u8; row_len];
+    for src in rgb.chunks_exact(row_len).rev() {
+        for (d, s) in row.chunks_exact_mut(3).zip(src.chunks_exact(3)) {
+            d.copy_from_slice(&[s[2], s[1], s[0]]);
+        }
+        out.write_all(&row).map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

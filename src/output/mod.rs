@@ -2,9 +2,9 @@
 //! written next to its destination and renamed into place, so an existing
 //! image is never replaced by a partial one.
 //!
-//! - 8-bit formats (`.png`, `.tga`, `.ppm`, `.bmp`): [`ldr`], clamped to
+//! - 8-bit formats (`.png`, `.tga`, `.ppm`, `.bmp`): `ldr`, clamped to
 //!   `[0, 1]` and quantised like the course's image code.
-//! - High dynamic range (`.exr`, `.pfm`): [`hdr`], linear 32-bit floats,
+//! - High dynamic range (`.exr`, `.pfm`): `hdr`, linear 32-bit floats,
 //!   unclamped, so values above 1 survive for tone mapping later.
 
 mod hdr;
@@ -20,7 +20,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum OutputError {
     /// The extension names no format glint writes.
-    #[error("{path}: unsupported image format (use .png, .tga, .ppm, .bmp, .exr or .pfm)")]
+    #[error("{path}: unsupported image format (supported: {exts})", exts = SUPPORTED_EXTENSIONS)]
     Format {
         /// The file.
         path: PathBuf,
@@ -73,6 +73,33 @@ impl Format {
     }
 }
 
+/// The extensions glint writes, for messages and help texts.
+pub const SUPPORTED_EXTENSIONS: &str = ".png, .tga, .ppm, .bmp, .exr, .pfm";
+
+/// Checks, before any work, that an image could be written to `path`: its
+/// extension names a supported format and its folder exists. A render calls
+/// this first, so a typo in an output name costs nothing.
+pub fn check_path(path: &Path) -> Result<(), OutputError> {
+    Format::from_path(path).ok_or_else(|| OutputError::Format { path: path.into() })?;
+    let dir = folder_of(path);
+    if dir.is_dir() {
+        Ok(())
+    } else {
+        Err(OutputError::NoDir {
+            path: path.into(),
+            dir,
+        })
+    }
+}
+
+/// The folder `path` is written into (`.` for a bare name).
+fn folder_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
 /// Writes `pixels` (linear RGB, row-major, top row first) as the image format
 /// `path`'s extension names.
 pub fn write_rgb(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<(), OutputError> {
@@ -98,10 +125,7 @@ fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), String>,
 ) -> Result<(), OutputError> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = folder_of(path);
     if !dir.is_dir() {
         return Err(OutputError::NoDir {
             path: path.into(),

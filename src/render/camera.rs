@@ -109,6 +109,36 @@ impl CameraModel {
         }
     }
 
+    /// Where the world point `p` appears: the screen point (in the `[0,1]²`
+    /// coordinates of [`CameraModel::ray`]) whose ray passes through `p`, or
+    /// `None` for a point on or behind a perspective camera's centre plane.
+    /// The inverse of `ray`, for drawing world-space things over an image.
+    pub fn project(&self, p: Vec3) -> Option<Vec2> {
+        let v = p - self.center;
+        let (x, y) = (v.dot(self.horizontal), v.dot(self.up));
+        let (x, y) = if self.perspective {
+            let z = v.dot(self.direction);
+            if z <= 0.0 {
+                return None;
+            }
+            (x / z, y / z)
+        } else {
+            (x, y)
+        };
+        Some(Vec2::new(x / self.span + 0.5, y / self.span + 0.5))
+    }
+
+    /// Signed distance of `p` in front of the camera's centre plane (along
+    /// the viewing direction); what [`CameraModel::project`] needs positive.
+    pub fn depth_of(&self, p: Vec3) -> f32 {
+        (p - self.center).dot(self.direction)
+    }
+
+    /// Whether the camera is perspective (else orthographic).
+    pub fn is_perspective(&self) -> bool {
+        self.perspective
+    }
+
     /// Smallest `t` a camera ray accepts: orthographic cameras see objects
     /// behind their centre plane (scene1_07 puts the camera inside spheres).
     pub fn tmin(&self) -> f32 {
@@ -131,8 +161,54 @@ pub fn screen_point(i: u32, j: u32, o: Vec2, w: u32, h: u32) -> Vec2 {
     )
 }
 
+/// The inverse of [`screen_point`]: continuous pixel coordinates of screen
+/// point `s` in a `w`×`h` image, x to the right and y *up* from the bottom
+/// edge (pixel `(i, j)` covers `[i, i+1]×[j, j+1]`).
+pub fn pixel_of_screen(s: Vec2, w: u32, h: u32) -> Vec2 {
+    let m = w.max(h) as f32;
+    Vec2::new(
+        (s.x - 0.5) * m + w as f32 * 0.5,
+        (s.y - 0.5) * m + h as f32 * 0.5,
+    )
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn project_inverts_ray() {
+        for cam in [
+            Camera::Perspective {
+                center: Vec3::new(1.0, 2.0, 3.0),
+                direction: Vec3::new(0.2, -0.5, -1.0),
+                up: Vec3::Y,
+                angle_deg: 40.0,
+            },
+            Camera::Orthographic {
+                center: Vec3::new(1.0, 2.0, 3.0),
+                direction: Vec3::new(0.2, -0.5, -1.0),
+                up: Vec3::Y,
+                size: 5.0,
+            },
+        ] {
+            let c = CameraModel::new(&cam);
+            for s in [
+                Vec2::new(0.1, 0.7),
+                Vec2::new(0.5, 0.5),
+                Vec2::new(0.9, 0.2),
+            ] {
+                let p = c.ray(s).at(7.5);
+                let back = c.project(p).unwrap();
+                assert!((back - s).length() < 1e-5, "{s} -> {back}");
+                let px = pixel_of_screen(back, 40, 30);
+                let s2 = screen_point(0, 0, px, 40, 30);
+                assert!((s2 - back).length() < 1e-5);
+            }
+            if c.is_perspective() {
+                assert!(c.project(c.ray(Vec2::splat(0.5)).at(-1.0)).is_none());
+            }
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -14,7 +14,7 @@ pub mod sampler;
 pub mod views;
 
 pub use adaptive::Adaptive;
-pub use camera::{screen_point, CameraModel};
+pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use filter::Filter;
 pub use frame::Frame;
 pub use sampler::{GridLayout, SampleStream, Sampler, SamplerKind};

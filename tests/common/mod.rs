@@ -6,10 +6,28 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The course's scenes, relative to the crate root (where tests run).
-pub const SCENES: &str = "../shared/scenes/6837";
-/// The independent reference renders.
-pub const REFERENCE: &str = "../shared/reference/6837";
+/// Where the course data is, and how a test skips without it (one rule for
+/// unit and integration tests).
+#[path = "../../src/testdata.rs"]
+pub mod testdata;
+
+/// The course's scenes, or `None` (test reported as skipped) when the data
+/// folder is absent.
+pub fn scenes(test: &str) -> Option<PathBuf> {
+    testdata::scenes(test)
+}
+
+/// The independent reference renders, or `None` (skipped) when absent.
+pub fn references(test: &str) -> Option<PathBuf> {
+    testdata::references(test)
+}
+
+/// glint's own example scenes (`scenes/` in the repository).
+pub fn own_scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+}
 
 /// How far an image is from its reference.
 #[derive(Debug, Clone, Copy)]
@@ -61,21 +79,23 @@ pub struct CmdLine {
     pub text: String,
     /// Its arguments after `raytracer`.
     pub args: Vec<String>,
-    /// Output file names the line names (colour, depth, normals).
+    /// Output file names the line names (colour, depth, normals, sample and
+    /// filter views).
     pub outputs: Vec<String>,
 }
 
 /// The lines of `commands/<file>` that write at least one image.
-pub fn command_lines(file: &str) -> Vec<CmdLine> {
-    let text = std::fs::read_to_string(Path::new(SCENES).join("commands").join(file))
-        .expect("command file");
+pub fn command_lines(scenes: &Path, file: &str) -> Vec<CmdLine> {
+    let text = std::fs::read_to_string(scenes.join("commands").join(file)).expect("command file");
     text.lines()
         .filter_map(|l| {
             let args: Vec<String> = l.split_whitespace().skip(1).map(String::from).collect();
             let mut outputs = Vec::new();
             for (i, a) in args.iter().enumerate() {
                 match a.as_str() {
-                    "-output" | "-normals" => outputs.push(args[i + 1].clone()),
+                    "-output" | "-normals" | "-render_samples" | "-render_filter" => {
+                        outputs.push(args[i + 1].clone())
+                    }
                     "-depth" => outputs.push(args[i + 3].clone()),
                     _ => {}
                 }
@@ -89,10 +109,10 @@ pub fn command_lines(file: &str) -> Vec<CmdLine> {
         .collect()
 }
 
-/// Runs `raytracer` with `args`, reading the scene from the shared folder and
+/// Runs `raytracer` with `args`, reading the scene from `scenes` and
 /// writing into `out_dir`. Returns stderr on failure.
-pub fn run_raytracer(args: &[String], out_dir: &Path) -> Result<(), String> {
-    let scenes = std::fs::canonicalize(SCENES).expect("shared scenes folder");
+pub fn run_raytracer(scenes: &Path, args: &[String], out_dir: &Path) -> Result<(), String> {
+    let scenes = std::fs::canonicalize(scenes).expect("scenes folder");
     let mut args = args.to_vec();
     if let Some(i) = args.iter().position(|a| a == "-input") {
         args[i + 1] = scenes.join(&args[i + 1]).to_string_lossy().into_owned();
@@ -109,22 +129,41 @@ pub fn run_raytracer(args: &[String], out_dir: &Path) -> Result<(), String> {
     }
 }
 
-/// A fresh, empty scratch folder for one test.
-pub fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("glint-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh, empty scratch folder for one test, removed (with everything in
+/// it) when the value is dropped. Derefs to its path.
+pub struct Scratch(tempfile::TempDir);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
 }
 
-/// The reference PNG for an output named `name` (`output1_01.tga` → `output1_01.png`).
-pub fn reference_for(name: &str) -> PathBuf {
-    Path::new(REFERENCE).join(Path::new(name).with_extension("png"))
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+/// A [`Scratch`] folder named after the test, under the system's temp dir.
+pub fn scratch(name: &str) -> Scratch {
+    Scratch(
+        tempfile::Builder::new()
+            .prefix(&format!("glint-test-{name}-"))
+            .tempdir()
+            .expect("temporary folder"),
+    )
+}
+
+/// The reference PNG in `refs` for an output named `name` (`output1_01.tga` → `output1_01.png`).
+pub fn reference_for(refs: &Path, name: &str) -> PathBuf {
+    refs.join(Path::new(name).with_extension("png"))
 }
 
 /// The line of `commands/<file>` that writes `output` (e.g. `output6_13.tga`).
-pub fn line_for(file: &str, output: &str) -> CmdLine {
-    command_lines(file)
+pub fn line_for(scenes: &Path, file: &str, output: &str) -> CmdLine {
+    command_lines(scenes, file)
         .into_iter()
         .find(|l| l.outputs.iter().any(|o| o == output))
         .unwrap_or_else(|| panic!("{file} has no line writing {output}"))
@@ -182,4 +221,20 @@ pub fn diff_pixels(a: &[[u8; 3]], b: &[[u8; 3]]) -> Diff {
         mean_abs: sum as f64 / (3.0 * n),
         frac_off: off as f64 / n,
     }
+}
+
+/// The course's scenes and reference renders together.
+pub struct CourseData {
+    /// `scenes/6837`: scene files, meshes, `commands/`.
+    pub scenes: PathBuf,
+    /// `reference/6837`: the independent reference renders.
+    pub refs: PathBuf,
+}
+
+/// Both course folders, or `None` (test reported as skipped) when absent.
+pub fn course_data(test: &str) -> Option<CourseData> {
+    Some(CourseData {
+        scenes: scenes(test)?,
+        refs: references(test)?,
+    })
 }

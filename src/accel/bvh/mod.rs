@@ -15,6 +15,8 @@ mod build;
 mod split;
 mod traverse;
 
+pub use traverse::NodeVisit;
+
 use super::{Aggregate, PrimHit, Split};
 use crate::math::{Aabb, Ray};
 use crate::primitive::Primitive;
@@ -72,6 +74,21 @@ impl Bvh {
         &self.ids
     }
 
+    /// The closest hit, calling `visit` with every node whose box the search
+    /// tests, and whether the ray entered it: the renderer's search itself
+    /// ([`Aggregate::intersect`] passes a visitor that does nothing).
+    pub fn intersect_visiting(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+        visit: impl FnMut(NodeVisit),
+    ) -> Option<PrimHit> {
+        traverse::closest(self, prims, ray, tmin, tmax, c, visit)
+    }
+
     /// Depth of the deepest leaf (a lone root is 0).
     pub fn depth(&self) -> usize {
         fn go(nodes: &[Node], k: usize) -> usize {
@@ -99,7 +116,7 @@ impl Aggregate for Bvh {
         tmax: f32,
         c: &mut Counters,
     ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c)
+        traverse::closest(self, prims, ray, tmin, tmax, c, |_| {})
     }
 
     fn occluded(

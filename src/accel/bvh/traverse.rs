@@ -18,9 +18,19 @@ use crate::stats::Counters;
 const STACK: usize = 64;
 const _: () = assert!(FORCE_MEDIAN_DEPTH + 32 <= STACK);
 
+/// One node the traversal tested.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeVisit {
+    /// Node index (depth-first order; 0 is the root).
+    pub node: u32,
+    /// Whether the ray entered its box (within `[tmin, best hit so far]`).
+    pub entered: bool,
+}
+
 /// Visits, front to back, the leaves whose boxes the ray enters within
 /// `[tmin, *t_limit]`; `leaf` tests a leaf's ids, may lower `*t_limit`, and
-/// returns true to stop the walk.
+/// returns true to stop the walk. `visit` sees every node whose box is
+/// tested (a no-op for rendering, compiled away).
 #[inline]
 fn walk(
     bvh: &Bvh,
@@ -28,6 +38,7 @@ fn walk(
     tmin: f32,
     t_limit: &mut f32,
     c: &mut Counters,
+    mut visit: impl FnMut(NodeVisit),
     mut leaf: impl FnMut(&[u32], &mut f32, &mut Counters) -> bool,
 ) {
     if bvh.nodes.is_empty() {
@@ -41,7 +52,12 @@ fn walk(
     loop {
         let n = &bvh.nodes[k];
         c.nodes_visited += 1;
-        if n.bounds.hit(ray, inv, tmin, *t_limit).is_some() {
+        let entered = n.bounds.hit(ray, inv, tmin, *t_limit).is_some();
+        visit(NodeVisit {
+            node: k as u32,
+            entered,
+        });
+        if entered {
             if !n.is_leaf() {
                 let (near, far) = if neg[n.axis as usize] {
                     (n.offset, k as u32 + 1)
@@ -66,7 +82,7 @@ fn walk(
     }
 }
 
-/// Closest hit with `tmin < t < tmax`.
+/// Closest hit with `tmin < t < tmax`; `visit` sees every node tested.
 pub(super) fn closest(
     bvh: &Bvh,
     prims: &[Primitive],
@@ -74,10 +90,11 @@ pub(super) fn closest(
     tmin: f32,
     tmax: f32,
     c: &mut Counters,
+    visit: impl FnMut(NodeVisit),
 ) -> Option<PrimHit> {
     let mut best = None;
     let mut t_best = tmax;
-    walk(bvh, ray, tmin, &mut t_best, c, |ids, t_best, c| {
+    walk(bvh, ray, tmin, &mut t_best, c, visit, |ids, t_best, c| {
         for &id in ids {
             c.intersection_tests += 1;
             if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, *t_best) {
@@ -102,15 +119,23 @@ pub(super) fn any(
 ) -> bool {
     let mut hit = false;
     let mut t_limit = tmax;
-    walk(bvh, ray, tmin, &mut t_limit, c, |ids, t_limit, c| {
-        hit = ids.iter().any(|&id| {
-            c.intersection_tests += 1;
-            prims[id as usize]
-                .shape
-                .intersect(ray, tmin, *t_limit)
-                .is_some()
-        });
-        hit
-    });
+    walk(
+        bvh,
+        ray,
+        tmin,
+        &mut t_limit,
+        c,
+        |_| {},
+        |ids, t_limit, c| {
+            hit = ids.iter().any(|&id| {
+                c.intersection_tests += 1;
+                prims[id as usize]
+                    .shape
+                    .intersect(ray, tmin, *t_limit)
+                    .is_some()
+            });
+            hit
+        },
+    );
     hit
 }

@@ -125,26 +125,25 @@ impl Grid {
         CellWalk::new(&self.lattice, ray, tmin, tmax)
     }
 
-    /// Turns mailboxing off (on by default), to measure what it saves.
-    pub fn set_mailbox(&mut self, on: bool) {
-        self.mailbox = on;
-    }
-}
-
-impl Aggregate for Grid {
-    fn intersect(
+    /// The closest hit, calling `visit` with every cell the search walks,
+    /// in order (the last one holds the accepted hit, if any). This is the
+    /// renderer's search itself: [`Aggregate::intersect`] calls it with a
+    /// visitor that does nothing, and the traversal views record with it.
+    pub fn intersect_visiting(
         &self,
         prims: &[Primitive],
         ray: &Ray,
         tmin: f32,
         tmax: f32,
         c: &mut Counters,
+        mut visit: impl FnMut(&Cell),
     ) -> Option<PrimHit> {
         let mut best: Option<PrimHit> = None;
         let mut t_best = tmax;
         let mut seen = Mailbox::new();
         for cell in self.walk(ray, tmin, tmax) {
             c.nodes_visited += 1;
+            visit(&cell);
             for &id in self.cell_items(cell.index) {
                 if self.mailbox && !seen.first_visit(id) {
                     continue;
@@ -161,6 +160,24 @@ impl Aggregate for Grid {
             }
         }
         best
+    }
+
+    /// Turns mailboxing off (on by default), to measure what it saves.
+    pub fn set_mailbox(&mut self, on: bool) {
+        self.mailbox = on;
+    }
+}
+
+impl Aggregate for Grid {
+    fn intersect(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+    ) -> Option<PrimHit> {
+        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
     }
 
     fn occluded(

@@ -135,6 +135,43 @@ impl Octree {
         LeafWalk::new(self, ray, tmin, tmax)
     }
 
+    /// The closest hit, calling `visit` with every leaf the search walks, in
+    /// order: the renderer's search itself ([`Aggregate::intersect`] passes
+    /// a visitor that does nothing), which the traversal views record.
+    pub fn intersect_visiting(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+        mut visit: impl FnMut(&Leaf),
+    ) -> Option<PrimHit> {
+        let mut best: Option<PrimHit> = None;
+        let mut t_best = tmax;
+        let mut seen = Mailbox::new();
+        let mut walk = self.walk(ray, tmin, tmax);
+        for leaf in walk.by_ref() {
+            visit(&leaf);
+            for &id in leaf.items {
+                if !seen.first_visit(id) {
+                    continue;
+                }
+                c.intersection_tests += 1;
+                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
+                    t_best = t;
+                    best = Some(PrimHit { t, prim: id });
+                }
+            }
+            // Leaves come front to back: nothing later can beat a hit in here.
+            if t_best <= leaf.t_exit {
+                break;
+            }
+        }
+        c.nodes_visited += walk.visited;
+        best
+    }
+
     /// The box the root covers (the primitives' bounds, padded).
     pub fn root_bounds(&self) -> Aabb {
         self.root
@@ -154,6 +191,29 @@ impl Octree {
     pub fn depth(&self) -> u32 {
         self.depth
     }
+
+    /// Every node's box, depth (the root is 0) and whether it is a leaf,
+    /// parents before children: for drawing the structure.
+    pub fn node_boxes(&self) -> Vec<(Aabb, u32, bool)> {
+        let mut out = Vec::new();
+        if self.nodes.is_empty() {
+            return out;
+        }
+        let mut stack = vec![(0usize, self.root, 0u32)];
+        while let Some((k, b, d)) = stack.pop() {
+            match self.nodes[k] {
+                Node::Leaf { .. } => out.push((b, d, true)),
+                Node::Inner { first, axes } => {
+                    out.push((b, d, false));
+                    for c in child_codes(axes) {
+                        let child = first as usize + slot(c, axes);
+                        stack.push((child, child_box(&b, c, axes), d + 1));
+                    }
+                }
+            }
+        }
+        out
+    }
 }
 
 impl Aggregate for Octree {
@@ -165,28 +225,7 @@ impl Aggregate for Octree {
         tmax: f32,
         c: &mut Counters,
     ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut t_best = tmax;
-        let mut seen = Mailbox::new();
-        let mut walk = self.walk(ray, tmin, tmax);
-        for leaf in walk.by_ref() {
-            for &id in leaf.items {
-                if !seen.first_visit(id) {
-                    continue;
-                }
-                c.intersection_tests += 1;
-                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
-                    t_best = t;
-                    best = Some(PrimHit { t, prim: id });
-                }
-            }
-            // Leaves come front to back: nothing later can beat a hit in here.
-            if t_best <= leaf.t_exit {
-                break;
-            }
-        }
-        c.nodes_visited += walk.visited;
-        best
+        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
     }
 
     fn occluded(

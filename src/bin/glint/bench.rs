@@ -1,5 +1,6 @@
-//! `glint bench`: every accelerator on the course's bunnies, the 6.837 logo
-//! and a generated mesh of a million triangles, in one table.
+//! `glint bench`: every accelerator on glint's own example scenes (by
+//! default) or the course's bunnies and 6.837 logo (`--course DIR`), plus any
+//! OBJ given (e.g. a generated mesh of a million triangles), in one table.
 //!
 //! Times are medians of several runs in this one process, so the ratios
 //! between accelerators are taken under the same machine load.
@@ -16,8 +17,10 @@ use std::time::Instant;
 
 /// Settings of a benchmark run.
 pub struct BenchArgs {
-    /// Folder of the 6.837 scenes.
+    /// Folder of glint's own example scenes (`scenes/`).
     pub scenes: PathBuf,
+    /// Folder of the 6.837 scenes: bench those instead of glint's own.
+    pub course: Option<PathBuf>,
     /// Extra OBJ meshes to bench (e.g. meshgen's million-triangle sphere).
     pub meshes: Vec<PathBuf>,
     /// Image size (square).
@@ -50,17 +53,42 @@ struct Row {
 /// Runs the benchmark and prints the table (markdown) to stdout.
 pub fn run(args: &BenchArgs) -> Result<(), String> {
     let mut cases: Vec<(String, Scene)> = Vec::new();
-    for name in [
-        "scene6_04_bunny_mesh_200.txt",
-        "scene6_05_bunny_mesh_1k.txt",
-        "scene6_06_bunny_mesh_5k.txt",
-        "scene6_07_bunny_mesh_40k.txt",
-        "scene6_18_6.837_logo.txt",
-    ] {
-        let scene = load_scene(&args.scenes.join(name)).map_err(|e| e.render())?;
+    let (dir, names, stadium): (&Path, &[&str], _) = match &args.course {
+        Some(dir) => (
+            dir,
+            &[
+                "scene6_04_bunny_mesh_200.txt",
+                "scene6_05_bunny_mesh_1k.txt",
+                "scene6_06_bunny_mesh_5k.txt",
+                "scene6_07_bunny_mesh_40k.txt",
+                "scene6_18_6.837_logo.txt",
+            ],
+            (
+                "bunny_in_stadium",
+                dir.join("bunny_40k.obj"),
+                Some((-0.07, 200.0)),
+            ),
+        ),
+        None => (
+            &args.scenes,
+            &[
+                "whitted.txt",
+                "mesh_knot_1k.txt",
+                "mesh_knot_16k.txt",
+                "mesh_knot_64k.txt",
+            ],
+            (
+                "knot_in_stadium",
+                args.scenes.join("meshes/knot_16k.obj"),
+                None,
+            ),
+        ),
+    };
+    for name in names {
+        let scene = load_scene(&dir.join(name)).map_err(|e| e.render())?;
         cases.push((name.trim_end_matches(".txt").to_string(), scene));
     }
-    cases.push(("bunny_in_stadium".into(), stadium_scene(&args.scenes)?));
+    cases.push((stadium.0.into(), stadium_scene(&stadium.1, stadium.2)?));
     for mesh in &args.meshes {
         cases.push((display_name(mesh), mesh_scene(mesh)?));
     }
@@ -170,13 +198,18 @@ fn display_name(p: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// The "teapot in a stadium": the 40k bunny (about 0.15 units across) on a
-/// floor of two triangles 400 units wide. A uniform grid sized to the whole
-/// scene puts the bunny into a handful of cells; a BVH adapts.
-fn stadium_scene(scenes: &Path) -> Result<Scene, String> {
-    let mut scene = mesh_scene(&scenes.join("bunny_40k.obj"))?;
-    let y = -0.07;
-    let w = 200.0;
+/// The "teapot in a stadium": a mesh on a floor of two triangles thousands of
+/// times as wide (400 units under the 40k bunny, which is 0.15 across). A
+/// uniform grid sized to the whole scene puts the mesh into a handful of
+/// cells; a BVH adapts. `floor` is (height, half width), or `None` for a
+/// floor just under the mesh, 1350 mesh sizes to each side.
+fn stadium_scene(mesh: &Path, floor: Option<(f32, f32)>) -> Result<Scene, String> {
+    let mut scene = mesh_scene(mesh)?;
+    let (y, w) = floor.unwrap_or_else(|| {
+        let b = World::build(&scene, BuildOptions::default()).bounds();
+        let size = (b.max - b.min).max_element();
+        (b.min.y - 0.05 * size, 1350.0 * size)
+    });
     let corners = [
         Vec3::new(-w, y, -w),
         Vec3::new(w, y, -w),

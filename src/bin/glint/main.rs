@@ -22,14 +22,20 @@ struct Cli {
 }
 
 mod bench;
+mod raytree;
+mod structure;
+mod traverse;
 
 #[derive(Subcommand)]
 enum Command {
-    /// Time every accelerator on the course's meshes (and any OBJ given).
+    /// Time every accelerator on glint's own example scenes (or the course's meshes, and any OBJ given).
     Bench {
-        /// Folder holding the 6.837 scenes.
-        #[arg(long, default_value = "../shared/scenes/6837")]
+        /// Folder of glint's own example scenes.
+        #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
+        /// Bench the course's bunnies and logo from this folder instead (e.g. ../shared/scenes/6837).
+        #[arg(long, value_name = "DIR")]
+        course: Option<PathBuf>,
         /// Extra OBJ meshes, e.g. the anchors' meshgen output (see scripts/bench.sh).
         #[arg(long)]
         mesh: Vec<PathBuf>,
@@ -47,7 +53,14 @@ enum Command {
         only: Option<String>,
     },
     /// Render a scene to an image.
+    #[command(long_about = RENDER_HELP)]
     Render(Box<RenderArgs>),
+    /// Record every ray one pixel spawns: .json tree, .obj/.ply segments, or drawn over the image.
+    Raytree(raytree::RaytreeArgs),
+    /// Show the grid cells, octree leaves or BVH boxes an accelerator looks at for some pixels' eye rays.
+    Traverse(traverse::TraverseArgs),
+    /// Draw a BVH's or an octree's boxes at one depth (or its leaves) over the rendered image.
+    Structure(structure::StructureArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -55,11 +68,24 @@ enum Command {
     },
 }
 
+const RENDER_HELP: &str = "Render a scene to an image.
+
+SCENE is a scene file in the MIT 6.837 format, or a bare Wavefront .obj mesh, which renders \
+directly: glint frames it with a camera looking at its bounding box and one light.
+
+The output format comes from the extension: .png, .tga (uncompressed 24-bit), .ppm (binary P6) \
+and .bmp are 8-bit, clamped to [0, 1]; .exr (OpenEXR) and .pfm (portable float map) keep the \
+linear 32-bit values unclamped. An unsupported extension is refused before any work (exit 2).
+
+The eye ray of each pixel goes through the pixel's centre. The `raytracer` command, which \
+runs the course's command lines verbatim, uses the pixel's lower-left corner instead, the \
+course's convention, which its reference images match exactly.";
+
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (MIT 6.837 format).
+    /// Scene file (MIT 6.837 format) or a bare .obj mesh.
     scene: PathBuf,
-    /// Output image (.png, .tga, .ppm, .bmp; .exr, .pfm for unclamped float).
+    /// Output image: .png, .tga, .ppm, .bmp (8-bit); .exr, .pfm (unclamped float).
     #[arg(short, long)]
     output: PathBuf,
     /// Image size in pixels.
@@ -177,8 +203,12 @@ fn real_main() -> ExitCode {
     match cli.command {
         Command::Render(a) => render(*a),
         Command::Info { scene } => info(scene),
+        Command::Raytree(a) => raytree::run(a),
+        Command::Traverse(a) => traverse::run(a),
+        Command::Structure(a) => structure::run(a),
         Command::Bench {
             scenes,
+            course,
             mesh,
             size,
             runs,
@@ -186,6 +216,7 @@ fn real_main() -> ExitCode {
             only,
         } => match bench::run(&bench::BenchArgs {
             scenes,
+            course,
             meshes: mesh,
             size,
             runs,

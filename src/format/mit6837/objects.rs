@@ -313,7 +313,14 @@ impl<'a> Parser<'a> {
         let mesh = match obj::load(&path) {
             Ok(m) => Arc::new(m),
             Err(LoadError::Io(e)) => {
-                let found = format!("{} ({})", quote(name.text), io_reason(&e));
+                // The token may be shortened by `quote`; the path it resolved
+                // to is shown in full, so the user sees where glint looked.
+                let found = format!(
+                    "{} ({}) at {}",
+                    quote(name.text),
+                    io_reason(&e),
+                    path.display()
+                );
                 return Err(self.error_found(Some(name), "a readable OBJ file", found));
             }
             Err(LoadError::Parse(e)) => return Err(e),
