@@ -804,6 +804,9 @@ fn moving_objects_and_timed_rays() {
             }
         }
     }
-    println!("moving objects: {rays} timed rays ({hits} hits) x {} accelerators", kinds.len());
+    println!(
+        "moving objects: {rays} timed rays ({hits} hits) x {} accelerators",
+        kinds.len()
+    );
     assert!(hits > rays / 10, "too few hits to mean anything: {hits}");
 }
