@@ -748,3 +748,124 @@ fn split_rays_converge_too() {
     }
     assert!(finals[1] < finals[0]);
 }
+
+// ---------------------------------------------------------------------------
+// Ray counts: the lecture's cost formula
+
+const COUNT_SCENE: &str = "PerspectiveCamera { center 0 0 5 direction 0 0 -1 up 0 1 0 angle 20\n\
+    aperture 0.05 focusDistance 5 shutter 0 1 }\n\
+    Lights { numLights 1 AreaLight { quad { corner -1 -1 3 edge1 2 0 0 edge2 0 2 0 } color 1 1 1 power 30 } }\n\
+    Samples { shadow 3 glossy 1 time 2 lens 5 }\n\
+    AmbientOcclusion { samples 7 distance 1 }\n\
+    Background { ambientLight 0.2 0.2 0.2 }\n\
+    Group { numObjects 1 Plane { normal 0 0 1 offset 0 } }\n";
+
+fn count_scene_path() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("glint-distribution-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("counts.txt");
+    std::fs::write(&path, COUNT_SCENE).unwrap();
+    path
+}
+
+/// Camera rays = pixels × spp × time × lens; shadow rays = camera rays ×
+/// shadow samples (one area light, every hit lit); AO rays = camera rays ×
+/// AO samples. Command-line counts override the scene's.
+#[test]
+fn ray_counts_follow_the_cost_formula() {
+    use glint::job::{Job, SampleOverrides};
+    let path = count_scene_path();
+    let (w, h) = (8u32, 6u32);
+    let mut job = Job::new(path.clone(), w, h);
+    job.integrator.shadows = true;
+    job.sampler = Some(Sampler::new(SamplerKind::Sobol, 4, 0));
+    let c = job.run().unwrap().counters;
+    let camera = u64::from(w * h) * 4 * 2 * 5;
+    assert_eq!(c.primary, camera);
+    assert_eq!(c.shadow, camera * 3);
+    assert_eq!(c.occlusion, camera * 7);
+    assert_eq!(c.rays_total(), camera * (1 + 3 + 7));
+
+    job.effect_samples = SampleOverrides {
+        shadow: Some(2),
+        time: Some(3),
+        lens: Some(1),
+        ao: Some(4),
+        ..SampleOverrides::default()
+    };
+    let c = job.run().unwrap().counters;
+    let camera = u64::from(w * h) * 4 * 3;
+    assert_eq!(c.primary, camera);
+    assert_eq!(c.shadow, camera * 2);
+    assert_eq!(c.occlusion, camera * 4);
+
+    // The AO image: one AO probe set per camera ray, no shadow rays.
+    job.ao_image = true;
+    let r = job.run().unwrap();
+    assert_eq!(r.counters.shadow, 0);
+    assert_eq!(r.counters.occlusion, camera * 4);
+    assert!(
+        r.frame.color.iter().all(|c| c.x > 0.99),
+        "an open plane is unoccluded"
+    );
+}
+
+/// `glint render` takes the flags and `--stats` lists every kind of ray.
+#[test]
+fn cli_flags_and_stats() {
+    let path = count_scene_path();
+    let out = path.with_file_name("counts.png");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .args([
+            "--size",
+            "4",
+            "4",
+            "--shadows",
+            "--stats",
+            "--quiet",
+            "--spp",
+            "2",
+        ])
+        .args([
+            "--shadow-samples",
+            "5",
+            "--glossy-samples",
+            "2",
+            "--time-samples",
+            "3",
+        ])
+        .args(["--lens-samples", "1", "--ao-samples", "2"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let value = |key: &str| -> u64 {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(key))
+            .unwrap_or_else(|| panic!("{key} in {text}"));
+        line[key.len()..].trim().parse().unwrap()
+    };
+    let camera = 16 * 2 * 3;
+    assert_eq!(value("primary rays"), camera);
+    assert_eq!(value("shadow rays"), camera * 5);
+    assert_eq!(value("occlusion rays"), camera * 2);
+    assert_eq!(value("  of which glossy"), 0);
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .args(["--shadow-samples", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}
