@@ -223,14 +223,37 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
     frame
         .color
         .par_chunks_mut(wu)
+        .zip(frame.depth.par_chunks_mut(wu))
+        .zip(frame.normal.par_chunks_mut(wu))
+        .zip(frame.samples.par_chunks_mut(wu))
         .zip(frame.complete.par_iter_mut())
         .enumerate()
-        .for_each(|(row, (line, complete))| {
+        .for_each(|(row, ((((line, depth), normal), samples), complete))| {
             let row = row as u32;
             let tys = tile_range(row, rows);
             *complete = tys
                 .clone()
                 .all(|ty| (0..cols).all(|tx| films[(ty * cols + tx) as usize].is_some()));
+            // Per-pixel planes, and with a support of 0 the colour too, come
+            // from the tile owning the pixel alone.
+            let own_ty = row / ts;
+            for f in (0..cols).filter_map(|tx| films[(own_ty * cols + tx) as usize].as_ref()) {
+                for x in f.tile.x0..f.tile.x1 {
+                    let k = f.tile_index(x, row);
+                    let p = x as usize;
+                    depth[p] = f.depth[k];
+                    normal[p] = f.normal[k];
+                    samples[p] = f.samples[k];
+                    if support == 0 {
+                        let a = f.area_index(x, row);
+                        let wt = f.weight[a];
+                        line[p] = if wt > 0.0 { f.sum[a] / wt } else { Vec3::ZERO };
+                    }
+                }
+            }
+            if support == 0 {
+                return;
+            }
             for (x, out) in line.iter_mut().enumerate() {
                 let x = x as u32;
                 let mut acc: Option<(Vec3, f32)> = None;
@@ -256,18 +279,6 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
                 };
             }
         });
-    // Per-pixel planes come from the tile owning the pixel.
-    for f in films.iter().flatten() {
-        for row in f.tile.row0..f.tile.row1 {
-            for x in f.tile.x0..f.tile.x1 {
-                let k = f.tile_index(x, row);
-                let p = row as usize * wu + x as usize;
-                frame.depth[p] = f.depth[k];
-                frame.normal[p] = f.normal[k];
-                frame.samples[p] = f.samples[k];
-            }
-        }
-    }
 }
 
 #[cfg(test)]

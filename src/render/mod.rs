@@ -160,6 +160,9 @@ pub fn render_image<I: Integrator>(
     if let Some(a) = settings.adaptive {
         return adaptive::render(world, camera, integrator, settings, &a, control);
     }
+    if settings.filter.support() == 0 {
+        return render_bands(world, camera, integrator, settings, control);
+    }
     let (w, h) = settings.size;
     let rects = tiles(w, h, settings.tile_size);
     let done: Vec<Option<(TileFilm, Counters, Vec<SampleRecord>)>> = rects
@@ -190,6 +193,131 @@ pub fn render_image<I: Integrator>(
         settings.filter.support(),
         &mut frame,
     );
+    Rendered {
+        frame,
+        counters,
+        samples,
+    }
+}
+
+/// Rows per work unit of [`render_bands`]: small enough to balance the load
+/// over many threads, large enough that each unit has thousands of rays.
+pub const BAND_ROWS: usize = 2;
+
+/// The loop for filters confined to their own pixel (support 0: box 0.5, the
+/// course's default, and every one-sample render). No sample reaches another
+/// pixel, so there are no margins to merge: the work unit is a band of
+/// [`BAND_ROWS`] full rows written straight into the frame, with no film and
+/// no copy. The arithmetic is the film's (`0 + w·c + …`, samples in index
+/// order), so the image is the one the tiled path would give, bit for bit.
+fn render_bands<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    settings: &Settings,
+    control: Control,
+) -> Rendered {
+    let (w, h) = settings.size;
+    let mut frame = Frame::new(w, h);
+    let wu = w as usize;
+    let sampler = &settings.sampler;
+    let filter = settings.filter;
+    // One ray per pixel at a fixed offset: its position and weight are the
+    // same for every pixel (the course's and `glint render`'s default).
+    let fixed = sampler
+        .fixed_offset()
+        .map(|o| (o, filter.weight(o.x - 0.5, o.y - 0.5)));
+    let one = sampler.spp() == 1;
+    let parts: Vec<(Counters, Vec<SampleRecord>)> = frame
+        .color
+        .par_chunks_mut(wu * BAND_ROWS)
+        .zip(frame.depth.par_chunks_mut(wu * BAND_ROWS))
+        .zip(frame.normal.par_chunks_mut(wu * BAND_ROWS))
+        .zip(frame.samples.par_chunks_mut(wu * BAND_ROWS))
+        .zip(frame.complete.par_chunks_mut(BAND_ROWS))
+        .enumerate()
+        .map(|(band, ((((color, depth), normal), samples), complete))| {
+            let mut counters = Counters::default();
+            let mut kept = Vec::new();
+            if control.cancelled() {
+                return (counters, kept);
+            }
+            for (r, done) in complete.iter_mut().enumerate() {
+                // Row 0 of the frame is the top of the image; screen j grows upwards.
+                let j = h - 1 - (band * BAND_ROWS + r) as u32;
+                for i in 0..w {
+                    let p = r * wu + i as usize;
+                    let (mut sum, mut wsum, mut nearest) = (Vec3::ZERO, 0.0f32, f32::INFINITY);
+                    for k in 0..sampler.spp() {
+                        let mut stream = sampler.stream((i, j), k);
+                        let (o, wt) = match fixed {
+                            Some(f) => {
+                                stream.skip();
+                                f
+                            }
+                            None => {
+                                let o = stream.next_2d();
+                                (o, filter.weight(o.x - 0.5, o.y - 0.5))
+                            }
+                        };
+                        let ray = camera.ray(screen_point(i, j, o, w, h));
+                        let (c, hit) = integrator.li(
+                            world,
+                            &ray,
+                            camera.tmin(),
+                            &mut stream,
+                            &mut counters,
+                            &mut NoObserver,
+                        );
+                        if wt == 1.0 {
+                            // `c · 1` is `c`: the box filters' case.
+                            sum += c;
+                            wsum += 1.0;
+                        } else if wt != 0.0 {
+                            sum += c * wt;
+                            wsum += wt;
+                        }
+                        // A lone sample is the nearest: skip the distance.
+                        let d2 = if one {
+                            0.0
+                        } else {
+                            (o - settings.reference).length_squared()
+                        };
+                        if d2 < nearest {
+                            nearest = d2;
+                            depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
+                            normal[p] = hit.map_or(Vec3::ZERO, |h| h.normal);
+                        }
+                        if settings.keep_samples {
+                            kept.push(SampleRecord {
+                                pixel: (i, j),
+                                offset: o,
+                                color: c,
+                            });
+                        }
+                    }
+                    // `sum / 1` is `sum`: skip the division of one-ray renders.
+                    color[p] = if wsum == 1.0 {
+                        sum
+                    } else if wsum > 0.0 {
+                        sum / wsum
+                    } else {
+                        Vec3::ZERO
+                    };
+                    samples[p] = sampler.spp();
+                }
+                *done = true;
+            }
+            control.progress((complete.len() * wu) as u64);
+            (counters, kept)
+        })
+        .collect();
+    let mut counters = Counters::default();
+    let mut samples = Vec::new();
+    for (c, s) in parts {
+        counters += c;
+        samples.extend(s);
+    }
     Rendered {
         frame,
         counters,

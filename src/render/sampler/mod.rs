@@ -93,6 +93,15 @@ impl Sampler {
         Self::new(SamplerKind::Uniform(GridLayout::Cell(offset)), 1, 0)
     }
 
+    /// The pixel position shared by every pixel when there is one sample per
+    /// pixel on a uniform grid (the one-ray renders), so a loop can hoist it.
+    pub fn fixed_offset(&self) -> Option<Vec2> {
+        match self.kind {
+            SamplerKind::Uniform(layout) if self.spp == 1 => Some(self.grid_point(layout, 0)),
+            _ => None,
+        }
+    }
+
     /// Samples per pixel.
     pub fn spp(&self) -> u32 {
         self.spp
@@ -133,32 +142,26 @@ impl Sampler {
     }
 
     /// Value of 2-D dimension `dim` for the stream's pixel and index.
+    #[inline]
     fn value_2d(&self, pixel_key: u64, index: u32, dim: u32) -> Vec2 {
-        let h = hash(&[self.seed, pixel_key, dim as u64]);
         // A key stream (index u32::MAX) is not part of any stratified set.
         let kind = if index == u32::MAX {
             SamplerKind::Random
         } else {
             self.kind
         };
+        // The pixel position of a uniform grid needs no hash: this is the
+        // whole cost of the one-ray-per-pixel path.
+        if let (SamplerKind::Uniform(layout), 0) = (kind, dim) {
+            return self.grid_point(layout, index % self.spp);
+        }
+        let h = hash(&[self.seed, pixel_key, dim as u64]);
         match kind {
             SamplerKind::Random => Vec2::new(
                 unit_f32(hash(&[h, index as u64, 0])),
                 unit_f32(hash(&[h, index as u64, 1])),
             ),
-            SamplerKind::Uniform(layout) => {
-                let (kx, ky) = self.grid();
-                let cell = self.stratum(index, dim, h);
-                let (cx, cy) = ((cell % kx) as f32, (cell / kx) as f32);
-                match layout {
-                    GridLayout::Cell(o) => {
-                        Vec2::new((cx + o.x) / kx as f32, (cy + o.y) / ky as f32)
-                    }
-                    GridLayout::Inset => {
-                        Vec2::new((cx + 1.0) / (kx + 1) as f32, (cy + 1.0) / (ky + 1) as f32)
-                    }
-                }
-            }
+            SamplerKind::Uniform(layout) => self.grid_point(layout, self.stratum(index, dim, h)),
             SamplerKind::Jittered => {
                 let (kx, ky) = self.grid();
                 let cell = self.stratum(index, dim, h);
@@ -174,6 +177,19 @@ impl Sampler {
             SamplerKind::Sobol => {
                 let (x, y) = sobol::point_2d(index, h as u32, (h >> 32) as u32, mix64(h) as u32);
                 Vec2::new(hash::unit_from_u32(x), hash::unit_from_u32(y))
+            }
+        }
+    }
+
+    /// The point of grid cell `cell` under `layout`.
+    #[inline]
+    fn grid_point(&self, layout: GridLayout, cell: u32) -> Vec2 {
+        let (kx, ky) = self.grid();
+        let (cx, cy) = ((cell % kx) as f32, (cell / kx) as f32);
+        match layout {
+            GridLayout::Cell(o) => Vec2::new((cx + o.x) / kx as f32, (cy + o.y) / ky as f32),
+            GridLayout::Inset => {
+                Vec2::new((cx + 1.0) / (kx + 1) as f32, (cy + 1.0) / (ky + 1) as f32)
             }
         }
     }
@@ -243,6 +259,12 @@ impl SampleStream<'_> {
         let v = self.sampler.value_1d(self.pixel_key, self.index, self.dim);
         self.dim += 1;
         v
+    }
+
+    /// Skips the next dimension (taken by the caller from elsewhere, e.g. a
+    /// hoisted [`Sampler::fixed_offset`]).
+    pub fn skip(&mut self) {
+        self.dim += 1;
     }
 
     /// How many dimensions have been taken so far.
