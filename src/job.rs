@@ -57,6 +57,9 @@ pub struct Job {
     pub filter_view: Option<(PathBuf, u32)>,
     /// Heat map of camera rays per pixel, with a scale bar.
     pub samples_image: Option<PathBuf>,
+    /// Heat maps of intersection tests and nodes visited per pixel, with
+    /// scale bars and totals (`--cost-image`).
+    pub cost_image: Option<PathBuf>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -188,6 +191,7 @@ impl Job {
             .chain(self.samples_view.as_ref().map(|(p, _)| p.as_path()))
             .chain(self.filter_view.as_ref().map(|(p, _)| p.as_path()))
             .chain(self.samples_image.as_deref())
+            .chain(self.cost_image.as_deref())
     }
 
     /// A job with the course's defaults (no outputs yet).
@@ -209,6 +213,7 @@ impl Job {
             samples_view: None,
             filter_view: None,
             samples_image: None,
+            cost_image: None,
             cancel: None,
             progress: false,
             stats_json: None,
@@ -273,6 +278,11 @@ impl Job {
         check_frame_memory(self.width, self.height, available_memory())?;
         for path in self.image_paths() {
             check_path(path)?;
+        }
+        if self.cost_image.is_some() && self.adaptive.is_some() {
+            return Err(JobError::Usage(
+                "--cost-image does not work with --adaptive: adaptive sampling shares its corner rays between pixels, so their cost belongs to no single pixel".into(),
+            ));
         }
         let t_load = Instant::now();
         let scene = load_scene(&self.input)?;
@@ -384,6 +394,10 @@ impl Job {
         }
         if let Some(out) = &self.samples_image {
             write_view(out, heat_map(w, h, &frame.samples))?;
+        }
+        if let Some(out) = &self.cost_image {
+            let c = crate::viz::cost::image(&frame);
+            write_sized(out, (c.width, c.height), &c.pixels)?;
         }
         if !complete {
             return Err(JobError::Interrupted(written));
@@ -526,7 +540,7 @@ pub struct Stats {
 /// Bytes per pixel of a [`Frame`] (colour `Vec3`, depth `f32`, normal
 /// `Vec3`, sample count `u32`) plus the tile films' filter sums (`Vec3` and
 /// `f32`) that exist until the merge.
-pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16;
+pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16 + 16;
 
 /// Memory assumed available where `/proc/meminfo` cannot be read.
 pub const FALLBACK_AVAILABLE: u64 = 16 << 30;
@@ -764,7 +778,7 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let msg = e.to_string();
         assert!(msg.contains("100000x100000"), "{msg}");
-        assert!(msg.contains("447.0 GiB"), "{msg}");
+        assert!(msg.contains("596.0 GiB"), "{msg}");
         assert!(msg.contains("12.0 GiB allowed"), "{msg}");
         // The product cannot overflow.
         assert!(check_frame_memory(u32::MAX, u32::MAX, u64::MAX).is_err());

@@ -339,7 +339,7 @@ fn zero_and_huge_sizes_are_refused_up_front() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("image size 100000x100000 would need 447.0 GiB of memory"),
+        err.contains("image size 100000x100000 would need 596.0 GiB of memory"),
         "{err}"
     );
     assert!(err.contains("choose a smaller size"), "{err}");

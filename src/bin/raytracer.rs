@@ -152,6 +152,11 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "FILE",
         "heat map of rays per pixel, with a scale bar",
     ),
+    (
+        "-cost_image",
+        "FILE",
+        "heat maps of intersection tests and nodes visited per pixel",
+    ),
     ("-help", "", "print this help (also -h, --help)"),
 ];
 
@@ -328,6 +333,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             }
             "-max_depth" => max_depth = number(flag, value("a depth")?)?,
             "-samples_image" => job.samples_image = Some(PathBuf::from(value("a file")?)),
+            "-cost_image" => job.cost_image = Some(PathBuf::from(value("a file")?)),
             other => match PREVIEW_ONLY.iter().find(|(f, _)| *f == other) {
                 Some((f, n)) => {
                     for _ in 0..*n {

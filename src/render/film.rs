@@ -81,6 +81,8 @@ pub struct TileFilm {
     nearest: Vec<f32>,
     /// Camera rays traced per tile pixel.
     pub samples: Vec<u32>,
+    /// What each tile pixel's rays cost.
+    pub cost: Vec<super::frame::PixelCost>,
 }
 
 impl TileFilm {
@@ -101,6 +103,7 @@ impl TileFilm {
             normal: vec![Vec3::ZERO; n],
             nearest: vec![f32::INFINITY; n],
             samples: vec![0; n],
+            cost: vec![Default::default(); n],
         }
     }
 
@@ -226,59 +229,63 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
         .zip(frame.depth.par_chunks_mut(wu))
         .zip(frame.normal.par_chunks_mut(wu))
         .zip(frame.samples.par_chunks_mut(wu))
+        .zip(frame.cost.par_chunks_mut(wu))
         .zip(frame.complete.par_iter_mut())
         .enumerate()
-        .for_each(|(row, ((((line, depth), normal), samples), complete))| {
-            let row = row as u32;
-            let tys = tile_range(row, rows);
-            *complete = tys
-                .clone()
-                .all(|ty| (0..cols).all(|tx| films[(ty * cols + tx) as usize].is_some()));
-            // Per-pixel planes, and with a support of 0 the colour too, come
-            // from the tile owning the pixel alone.
-            let own_ty = row / ts;
-            for f in (0..cols).filter_map(|tx| films[(own_ty * cols + tx) as usize].as_ref()) {
-                for x in f.tile.x0..f.tile.x1 {
-                    let k = f.tile_index(x, row);
-                    let p = x as usize;
-                    depth[p] = f.depth[k];
-                    normal[p] = f.normal[k];
-                    samples[p] = f.samples[k];
-                    if support == 0 {
-                        let a = f.area_index(x, row);
-                        let wt = f.weight[a];
-                        line[p] = if wt > 0.0 { f.sum[a] / wt } else { Vec3::ZERO };
-                    }
-                }
-            }
-            if support == 0 {
-                return;
-            }
-            for (x, out) in line.iter_mut().enumerate() {
-                let x = x as u32;
-                let mut acc: Option<(Vec3, f32)> = None;
-                for ty in tys.clone() {
-                    for tx in tile_range(x, cols) {
-                        let Some(f) = &films[(ty * cols + tx) as usize] else {
-                            continue;
-                        };
-                        if !f.area.contains(x, row) {
-                            continue;
+        .for_each(
+            |(row, (((((line, depth), normal), samples), cost), complete))| {
+                let row = row as u32;
+                let tys = tile_range(row, rows);
+                *complete = tys
+                    .clone()
+                    .all(|ty| (0..cols).all(|tx| films[(ty * cols + tx) as usize].is_some()));
+                // Per-pixel planes, and with a support of 0 the colour too, come
+                // from the tile owning the pixel alone.
+                let own_ty = row / ts;
+                for f in (0..cols).filter_map(|tx| films[(own_ty * cols + tx) as usize].as_ref()) {
+                    for x in f.tile.x0..f.tile.x1 {
+                        let k = f.tile_index(x, row);
+                        let p = x as usize;
+                        depth[p] = f.depth[k];
+                        normal[p] = f.normal[k];
+                        samples[p] = f.samples[k];
+                        cost[p] = f.cost[k];
+                        if support == 0 {
+                            let a = f.area_index(x, row);
+                            let wt = f.weight[a];
+                            line[p] = if wt > 0.0 { f.sum[a] / wt } else { Vec3::ZERO };
                         }
-                        let k = f.area_index(x, row);
-                        let (s, wt) = (f.sum[k], f.weight[k]);
-                        acc = Some(match acc {
-                            None => (s, wt),
-                            Some((a, aw)) => (a + s, aw + wt),
-                        });
                     }
                 }
-                *out = match acc {
-                    Some((s, wt)) if wt > 0.0 => s / wt,
-                    _ => Vec3::ZERO,
-                };
-            }
-        });
+                if support == 0 {
+                    return;
+                }
+                for (x, out) in line.iter_mut().enumerate() {
+                    let x = x as u32;
+                    let mut acc: Option<(Vec3, f32)> = None;
+                    for ty in tys.clone() {
+                        for tx in tile_range(x, cols) {
+                            let Some(f) = &films[(ty * cols + tx) as usize] else {
+                                continue;
+                            };
+                            if !f.area.contains(x, row) {
+                                continue;
+                            }
+                            let k = f.area_index(x, row);
+                            let (s, wt) = (f.sum[k], f.weight[k]);
+                            acc = Some(match acc {
+                                None => (s, wt),
+                                Some((a, aw)) => (a + s, aw + wt),
+                            });
+                        }
+                    }
+                    *out = match acc {
+                        Some((s, wt)) if wt > 0.0 => s / wt,
+                        _ => Vec3::ZERO,
+                    };
+                }
+            },
+        );
 }
 
 #[cfg(test)]

@@ -1,6 +1,17 @@
 use super::{depth_grey, normal_rgb};
 use crate::math::Vec3;
 
+/// The work one pixel's rays cost: pbrt's "pixel statistics". Every
+/// ray of every kind the pixel's samples spawned counts (shadow, reflected,
+/// transmitted), so the per-pixel values add up to the render's totals.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelCost {
+    /// Ray–primitive intersection tests.
+    pub tests: u64,
+    /// Accelerator nodes or grid cells visited.
+    pub nodes: u64,
+}
+
 /// What a render produced per pixel, row-major with row 0 at the top.
 ///
 /// Depth and normal hold the hit of the pixel's sample nearest to its
@@ -21,6 +32,9 @@ pub struct Frame {
     /// lattice points the pixel's subdivision used (shared corners counted
     /// in every pixel they touch).
     pub samples: Vec<u32>,
+    /// What tracing the pixel's samples cost the accelerators (zero under
+    /// adaptive sampling, whose corners are shared between pixels).
+    pub cost: Vec<PixelCost>,
     /// Per row (top first): whether it was rendered (a cancelled render
     /// leaves rows out).
     pub complete: Vec<bool>,
@@ -37,6 +51,7 @@ impl Frame {
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
             samples: vec![0; n],
+            cost: vec![PixelCost::default(); n],
             complete: vec![false; height as usize],
         }
     }

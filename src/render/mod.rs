@@ -16,7 +16,7 @@ pub mod views;
 pub use adaptive::Adaptive;
 pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use filter::Filter;
-pub use frame::Frame;
+pub use frame::{Frame, PixelCost};
 pub use sampler::{GridLayout, SampleStream, Sampler, SamplerKind};
 
 use crate::integrator::{Integrator, NoObserver, Whitted};
@@ -260,7 +260,7 @@ fn render_bands<I: Integrator>(
                                 (o, filter.weight(o.x - 0.5, o.y - 0.5))
                             }
                         };
-                        let ray = camera.ray(screen_point(i, j, o, w, h));
+                        let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
                         let (c, hit) = integrator.li(
                             world,
                             &ray,
@@ -342,6 +342,7 @@ fn render_tile<I: Integrator>(
         // Row 0 of the frame is the top of the image; screen j grows upwards.
         let j = h - 1 - row;
         for i in rect.x0..rect.x1 {
+            let before = counters;
             for k in 0..sampler.spp() {
                 let mut stream = sampler.stream((i, j), k);
                 let o = stream.next_2d();
@@ -365,6 +366,11 @@ fn render_tile<I: Integrator>(
                     });
                 }
             }
+            let k = film.tile_index(i, row);
+            film.cost[k] = PixelCost {
+                tests: counters.intersection_tests - before.intersection_tests,
+                nodes: counters.nodes_visited - before.nodes_visited,
+            };
         }
     }
     (film, counters, kept)

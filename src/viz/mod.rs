@@ -9,8 +9,10 @@
 //! - [`traversal`]: the cells, leaves or BVH boxes one ray's search looked at.
 //! - [`structure`]: a BVH's or octree's boxes at one depth.
 //! - [`grid`]: the uniform grid's occupied cells as boxes (assignment 5).
+//! - [`cost`]: per-pixel intersection tests and nodes visited as heat maps.
 //! - [`draw`]: lines, marks and labels on an RGB image.
 
+pub mod cost;
 pub mod draw;
 pub mod grid;
 pub mod raytree;

@@ -166,6 +166,9 @@ struct RenderArgs {
     /// Write a heat map of camera rays per pixel, with a scale bar.
     #[arg(long, value_name = "FILE")]
     samples_image: Option<PathBuf>,
+    /// Also write per-pixel cost: intersection tests (left) and nodes or cells visited (right), as heat maps with scale bars and totals.
+    #[arg(long, value_name = "FILE")]
+    cost_image: Option<PathBuf>,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_samples: Option<Vec<String>>,
@@ -319,6 +322,7 @@ fn render(a: RenderArgs) -> ExitCode {
         ao: a.ao_samples,
     };
     job.ao_image = a.integrator == IntegratorName::Ao;
+    job.cost_image = a.cost_image;
     for (what, v, slot) in [
         ("--render-samples", a.render_samples, &mut job.samples_view),
         ("--render-filter", a.render_filter, &mut job.filter_view),
