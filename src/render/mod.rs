@@ -234,83 +234,91 @@ fn render_bands<I: Integrator>(
         .zip(frame.depth.par_chunks_mut(wu * BAND_ROWS))
         .zip(frame.normal.par_chunks_mut(wu * BAND_ROWS))
         .zip(frame.samples.par_chunks_mut(wu * BAND_ROWS))
+        .zip(frame.cost.par_chunks_mut(wu * BAND_ROWS))
         .zip(frame.complete.par_chunks_mut(BAND_ROWS))
         .enumerate()
-        .map(|(band, ((((color, depth), normal), samples), complete))| {
-            let mut counters = Counters::default();
-            let mut kept = Vec::new();
-            if control.cancelled() {
-                return (counters, kept);
-            }
-            for (r, done) in complete.iter_mut().enumerate() {
-                // Row 0 of the frame is the top of the image; screen j grows upwards.
-                let j = h - 1 - (band * BAND_ROWS + r) as u32;
-                for i in 0..w {
-                    let p = r * wu + i as usize;
-                    let (mut sum, mut wsum, mut nearest) = (Vec3::ZERO, 0.0f32, f32::INFINITY);
-                    for k in 0..sampler.spp() {
-                        let mut stream = sampler.stream((i, j), k);
-                        let (o, wt) = match fixed {
-                            Some(f) => {
-                                stream.skip();
-                                f
-                            }
-                            None => {
-                                let o = stream.next_2d();
-                                (o, filter.weight(o.x - 0.5, o.y - 0.5))
-                            }
-                        };
-                        let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
-                        let (c, hit) = integrator.li(
-                            world,
-                            &ray,
-                            camera.tmin(),
-                            &mut stream,
-                            &mut counters,
-                            &mut NoObserver,
-                        );
-                        if wt == 1.0 {
-                            // `c · 1` is `c`: the box filters' case.
-                            sum += c;
-                            wsum += 1.0;
-                        } else if wt != 0.0 {
-                            sum += c * wt;
-                            wsum += wt;
-                        }
-                        // A lone sample is the nearest: skip the distance.
-                        let d2 = if one {
-                            0.0
-                        } else {
-                            (o - settings.reference).length_squared()
-                        };
-                        if d2 < nearest {
-                            nearest = d2;
-                            depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
-                            normal[p] = hit.map_or(Vec3::ZERO, |h| h.normal);
-                        }
-                        if settings.keep_samples {
-                            kept.push(SampleRecord {
-                                pixel: (i, j),
-                                offset: o,
-                                color: c,
-                            });
-                        }
-                    }
-                    // `sum / 1` is `sum`: skip the division of one-ray renders.
-                    color[p] = if wsum == 1.0 {
-                        sum
-                    } else if wsum > 0.0 {
-                        sum / wsum
-                    } else {
-                        Vec3::ZERO
-                    };
-                    samples[p] = sampler.spp();
+        .map(
+            |(band, (((((color, depth), normal), samples), cost), complete))| {
+                let mut counters = Counters::default();
+                let mut kept = Vec::new();
+                if control.cancelled() {
+                    return (counters, kept);
                 }
-                *done = true;
-            }
-            control.progress((complete.len() * wu) as u64);
-            (counters, kept)
-        })
+                for (r, done) in complete.iter_mut().enumerate() {
+                    // Row 0 of the frame is the top of the image; screen j grows upwards.
+                    let j = h - 1 - (band * BAND_ROWS + r) as u32;
+                    for i in 0..w {
+                        let p = r * wu + i as usize;
+                        let (mut sum, mut wsum, mut nearest) = (Vec3::ZERO, 0.0f32, f32::INFINITY);
+                        let before = counters;
+                        for k in 0..sampler.spp() {
+                            let mut stream = sampler.stream((i, j), k);
+                            let (o, wt) = match fixed {
+                                Some(f) => {
+                                    stream.skip();
+                                    f
+                                }
+                                None => {
+                                    let o = stream.next_2d();
+                                    (o, filter.weight(o.x - 0.5, o.y - 0.5))
+                                }
+                            };
+                            let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
+                            let (c, hit) = integrator.li(
+                                world,
+                                &ray,
+                                camera.tmin(),
+                                &mut stream,
+                                &mut counters,
+                                &mut NoObserver,
+                            );
+                            if wt == 1.0 {
+                                // `c · 1` is `c`: the box filters' case.
+                                sum += c;
+                                wsum += 1.0;
+                            } else if wt != 0.0 {
+                                sum += c * wt;
+                                wsum += wt;
+                            }
+                            // A lone sample is the nearest: skip the distance.
+                            let d2 = if one {
+                                0.0
+                            } else {
+                                (o - settings.reference).length_squared()
+                            };
+                            if d2 < nearest {
+                                nearest = d2;
+                                depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
+                                normal[p] = hit.map_or(Vec3::ZERO, |h| h.normal);
+                            }
+                            if settings.keep_samples {
+                                kept.push(SampleRecord {
+                                    pixel: (i, j),
+                                    offset: o,
+                                    color: c,
+                                });
+                            }
+                        }
+                        // `sum / 1` is `sum`: skip the division of one-ray renders.
+                        color[p] = if wsum == 1.0 {
+                            sum
+                        } else if wsum > 0.0 {
+                            sum / wsum
+                        } else {
+                            Vec3::ZERO
+                        };
+                        samples[p] = sampler.spp();
+                        cost[p] = PixelCost {
+                            tests: counters.intersection_tests - before.intersection_tests,
+                            nodes: counters.nodes_visited - before.nodes_visited,
+                        };
+                    }
+                    *done = true;
+                }
+                control.progress((complete.len() * wu) as u64);
+                (counters, kept)
+            },
+        )
         .collect();
     let mut counters = Counters::default();
     let mut samples = Vec::new();
