@@ -7,5 +7,5 @@ mod ray;
 
 pub use aabb::Aabb;
 pub use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
-pub use motion::{Keyframe, Motion};
+pub use motion::{Keyframe, Motion, SWEEP_STEPS};
 pub use ray::{offset_origin, Ray};
