@@ -411,5 +411,6 @@ fn band_loop_and_tiled_film_agree() {
     assert!(bits(&a) == bits(&b));
     assert_eq!(a.depth, b.depth);
     assert_eq!(a.samples, b.samples);
+    assert_eq!(a.cost, b.cost);
     assert_eq!(ca, cb);
 }

@@ -200,7 +200,7 @@ pub fn render_image<I: Integrator>(
     }
 }
 
-/// Rows per work unit of `render_bands`: small enough to balance the load
+/// Rows per work unit of the band loop (filters inside their pixel): small enough to balance the load
 /// over many threads, large enough that each unit has thousands of rays.
 pub const BAND_ROWS: usize = 2;
 

@@ -219,8 +219,6 @@ fn real_main() -> ExitCode {
         Command::Render(a) => render(*a),
         Command::Info { scene } => info(scene),
         Command::Raytree(a) => raytree::run(a),
-        Command::Traverse(a) => traverse::run(a),
-        Command::Structure(a) => structure::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
                 let dir = PathBuf::from("../shared/scenes/6837");
@@ -243,6 +241,8 @@ fn real_main() -> ExitCode {
                 }
             }
         }
+        Command::Traverse(a) => traverse::run(a),
+        Command::Structure(a) => structure::run(a),
         Command::Bench {
             scenes,
             course,
