@@ -5,12 +5,14 @@
 
 use glint::format::{obj::load_obj_from_bytes, parse_scene};
 use glint::integrator::{AoSettings, NoObserver, RayKind, Whitted};
+use glint::job::Job;
+use glint::limits;
 use glint::math::{Vec2, Vec3};
 use glint::render::{screen_point, CameraModel, Sampler, SamplerKind};
 use glint::scene::{Background, Camera, Node, Scene, Shape};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Scene text (lossily decoded) through the parser; a scene it accepts is
@@ -62,11 +64,96 @@ pub fn obj(data: &[u8]) {
     trace_a_few(&scene);
 }
 
+/// A command line (arguments separated by NUL bytes, read like the
+/// `raytracer` flags) assembled into a [`Job`] with the validation helpers
+/// both command lines call, then checked by [`Job::preflight`], which
+/// touches no file (it only looks paths up). Whatever the arguments: no
+/// panic, every message bounded, and a job that passes is within every limit.
+pub fn job_args(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    let args: Vec<&str> = text.split('\0').collect();
+    let mut job = Job::new(PathBuf::from("fuzz-scene.txt"), 8, 8);
+    let mut it = args.iter().copied();
+    let mut problem = None;
+    while let Some(flag) = it.next() {
+        let mut value = || it.next().unwrap_or("");
+        let step: Result<(), String> = (|| {
+            match flag {
+                "-input" => job.input = value().into(),
+                "-output" => job.output = Some(value().into()),
+                "-normals" => job.normals = Some(value().into()),
+                "-stats_json" => job.stats_json = Some(value().into()),
+                "-size" => {
+                    job.width = limits::parse_flag(flag, value())?;
+                    job.height = limits::parse_flag(flag, value())?;
+                }
+                "-depth" => {
+                    let t0 = limits::parse_finite(flag, value(), f32::MIN, f32::MAX)?;
+                    let t1 = limits::parse_finite(flag, value(), f32::MIN, f32::MAX)?;
+                    job.depth = Some((t0, t1, value().into()));
+                }
+                "-weight" => {
+                    job.integrator.weight_cutoff =
+                        limits::parse_finite(flag, value(), 0.0, f32::MAX)?
+                }
+                "-bounces" => {
+                    let n = limits::parse_flag(flag, value())?;
+                    job.integrator.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
+                }
+                "-threads" => {
+                    let n = limits::parse_flag(flag, value())?;
+                    job.threads = Some(limits::threads(flag, n, 2)?.0);
+                }
+                // Unchecked values, as a library caller could set them: the
+                // job's own checks must catch them.
+                "-raw_weight" => job.integrator.weight_cutoff = value().parse().unwrap_or(f32::NAN),
+                "-raw_threads" => job.threads = value().parse().ok(),
+                "-raw_bounces" => job.integrator.bounces = value().parse().unwrap_or(u32::MAX),
+                _ => {}
+            }
+            Ok(())
+        })();
+        if let Err(e) = step {
+            problem = Some(e);
+            break;
+        }
+    }
+    if let Some(msg) = problem {
+        assert!(msg.len() < 400, "flag message of {} bytes", msg.len());
+        return;
+    }
+    match job.preflight() {
+        Ok(()) => {
+            assert!(job.width >= 1 && job.height >= 1);
+            assert!(job
+                .threads
+                .is_none_or(|n| (1..=limits::MAX_THREADS).contains(&n)));
+            assert!(job.integrator.bounces <= limits::MAX_BOUNCES);
+            let w = job.integrator.weight_cutoff;
+            assert!(w.is_finite() && w >= 0.0);
+            let outs = job.outputs();
+            for (i, (_, a)) in outs.iter().enumerate() {
+                assert!(
+                    !glint::output::same_file(a, &job.input),
+                    "{a:?} is the input"
+                );
+                for (_, b) in &outs[..i] {
+                    assert!(!glint::output::same_file(a, b), "{a:?} and {b:?}");
+                }
+            }
+        }
+        Err(e) => {
+            let msg = limits::bounded_message(&e.to_string());
+            assert!(msg.len() < 64 * 1024, "message of {} bytes", msg.len());
+            assert!(matches!(e.exit_code(), 1 | 2), "{e}");
+        }
+    }
+}
+
 /// Builds `scene` both ways and traces a 3x3 grid of camera rays with every
 /// integrator feature on. A hit reached by a finite ray must have a `t` and a
 /// normal that are not NaN.
 fn trace_a_few(scene: &Scene) {
-    let camera = CameraModel::new(&scene.camera).with_lens(scene.effects.lens);
     let sampler = Sampler::new(SamplerKind::Sobol, 1, 0);
     for flatten in [true, false] {
         let world = World::build(
@@ -76,6 +163,7 @@ fn trace_a_few(scene: &Scene) {
                 ..BuildOptions::default()
             },
         );
+        let camera = CameraModel::new(&world.camera).with_lens(scene.effects.lens);
         let _ = world.bounds();
         for transparent_shadows in [false, true] {
             let integrator = Whitted {

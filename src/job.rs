@@ -2,13 +2,18 @@
 //! The binaries only translate their flags into a [`Job`].
 
 use crate::accel::AccelKind;
-use crate::format::{load_scene, ParseError};
+use crate::format::{load_scene_files, ParseError};
 use crate::integrator::{AmbientOcclusion, AoSettings, Whitted};
-use crate::output::{check_path, write_rgb, OutputError};
+use crate::limits;
+use crate::output::{
+    check_image, check_not_input, check_path, check_writable, write_file, write_rgb, FileIdentity,
+    OutputError,
+};
+use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Sampler, SamplerKind,
-    Settings, TILE_SIZE,
+    render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
+    Sampler, SamplerKind, Settings, TILE_SIZE,
 };
 use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
@@ -60,6 +65,9 @@ pub struct Job {
     /// Heat maps of intersection tests and nodes visited per pixel, with
     /// scale bars and totals (`--cost-image`).
     pub cost_image: Option<PathBuf>,
+    /// Render only this piece of the frame and write it as an EXR with a
+    /// data window (`--tile I/N`, `--crop`); see [`crate::piece`].
+    pub piece: Option<PieceSpec>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -145,11 +153,33 @@ impl JobError {
             // checked before any work.
             JobError::Parse(_)
             | JobError::Usage(_)
-            | JobError::Output(OutputError::Format { .. } | OutputError::NoDir { .. }) => 2,
+            | JobError::Output(
+                OutputError::Format { .. }
+                | OutputError::NoDir { .. }
+                | OutputError::Refused { .. },
+            ) => 2,
             JobError::Output(_) | JobError::Internal(_) => 1,
             JobError::Interrupted(_) => 130,
         }
     }
+}
+
+/// Loads `scene` for a command that writes the single file `output` (the
+/// `glint raytree`, `traverse` and `structure` views), rendering at `size`
+/// if `output` is an image: first checks that `output` can be written (and
+/// an image of that size fits memory and the format) and is not the scene,
+/// then, once the scene has named its meshes, that it is none of them.
+/// Nothing is written.
+pub fn load_scene_for(scene: &Path, output: &Path, size: (u32, u32)) -> Result<Scene, JobError> {
+    check_writable(output)?;
+    if check_path(output).is_ok() {
+        check_frame_memory(size.0, size.1, available_memory())?;
+        check_image(output, size.0, size.1)?;
+    }
+    check_not_input(output, &[scene.to_path_buf()])?;
+    let (loaded, files) = load_scene_files(scene)?;
+    check_not_input(output, &files)?;
+    Ok(loaded)
 }
 
 /// What a finished job measured.
@@ -194,6 +224,215 @@ impl Job {
             .chain(self.cost_image.as_deref())
     }
 
+    /// A piece renders one image, an EXR: nothing else this job could write
+    /// would be a piece of anything.
+    fn check_piece(&self, p: &PieceSpec) -> Result<(), JobError> {
+        let exr = self
+            .output
+            .as_ref()
+            .is_some_and(|o| o.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")));
+        if !exr {
+            return Err(JobError::Usage(format!(
+                "{}: a piece of a frame is written as OpenEXR: give an output ending in .exr",
+                p.label
+            )));
+        }
+        if self.image_paths().count() > 1 {
+            return Err(JobError::Usage(format!(
+                "{}: only the colour image can be rendered in pieces (no depth, normals, views or cost images)",
+                p.label
+            )));
+        }
+        if self.adaptive.is_some() {
+            return Err(JobError::Usage(format!(
+                "{}: adaptive sampling shares corner rays between tiles, so it cannot be split into pieces",
+                p.label
+            )));
+        }
+        if p.rect.x1 > self.width || p.rect.row1 > self.height {
+            return Err(JobError::Usage(format!(
+                "{} lies outside the {}x{} frame",
+                p.label, self.width, self.height
+            )));
+        }
+        Ok(())
+    }
+
+    /// The hash of everything that decides the image (not the accelerator,
+    /// the thread count or the outputs, which do not).
+    fn piece_hash(&self, scene: &Scene, settings: &Settings) -> String {
+        let parts = format!(
+            "{settings:?}|{:?}|flatten {}|texture {:?}",
+            self.integrator, self.build.flatten, self.integrator.texture_space
+        );
+        crate::piece::settings_hash(scene, &parts)
+    }
+
+    /// Every file this job may write, with what it is: the images, their
+    /// `.partial` twins (written when interrupted) and the statistics.
+    /// **A new kind of output must be added here**: [`Job::preflight`]
+    /// checks this list against the inputs and against itself.
+    pub fn outputs(&self) -> Vec<(String, PathBuf)> {
+        let mut out: Vec<(String, PathBuf)> = Vec::new();
+        let images = [
+            ("colour image", self.output.as_deref()),
+            (
+                "depth image",
+                self.depth.as_ref().map(|(_, _, p)| p.as_path()),
+            ),
+            ("normals image", self.normals.as_deref()),
+        ];
+        for (what, path) in images {
+            if let Some(p) = path {
+                out.push((what.into(), p.into()));
+                out.push((format!("{what} if interrupted"), partial_path(p)));
+            }
+        }
+        let views = [
+            (
+                "samples view",
+                self.samples_view.as_ref().map(|v| v.0.as_path()),
+            ),
+            (
+                "filter view",
+                self.filter_view.as_ref().map(|v| v.0.as_path()),
+            ),
+            ("samples heat map", self.samples_image.as_deref()),
+            ("cost image", self.cost_image.as_deref()),
+        ];
+        for (what, path) in views {
+            if let Some(p) = path {
+                out.push((what.into(), p.into()));
+                out.push((format!("{what} if interrupted"), partial_path(p)));
+            }
+        }
+        if let Some(p) = &self.stats_json {
+            out.push(("statistics file".into(), p.clone()));
+        }
+        out
+    }
+
+    /// Every check that needs no scene, done before any work: image size
+    /// and memory, each output's format, folder and size limits, the
+    /// numeric settings' ranges, and that no output is the scene file or
+    /// another output. The meshes are checked once the scene has named them
+    /// (still before anything is written).
+    pub fn preflight(&self) -> Result<(), JobError> {
+        if self.width == 0 || self.height == 0 {
+            return Err(JobError::Usage(format!(
+                "image size {}x{}: width and height must be at least 1",
+                self.width, self.height
+            )));
+        }
+        check_frame_memory(self.width, self.height, available_memory())?;
+        self.check_settings()?;
+        for path in self.image_paths() {
+            check_path(path)?;
+        }
+        let images = [self.output.as_deref(), self.normals.as_deref()];
+        let depth = self.depth.as_ref().map(|(_, _, p)| p.as_path());
+        for path in images.into_iter().chain([depth]).flatten() {
+            check_image(path, self.width, self.height)?;
+        }
+        self.check_views()?;
+        if let Some(p) = &self.stats_json {
+            check_writable(p)?;
+        }
+        self.check_clashes(std::slice::from_ref(&self.input))
+    }
+
+    /// The numeric settings are in their documented ranges
+    /// ([`crate::limits`]); the command lines check them with the flag's
+    /// name first, this catches any other caller.
+    fn check_settings(&self) -> Result<(), JobError> {
+        let usage = |m: String| JobError::Usage(m);
+        if let Some(n) = self.threads {
+            limits::int_in("threads", n, 1, limits::MAX_THREADS).map_err(usage)?;
+        }
+        limits::int_in("bounces", self.integrator.bounces, 0, limits::MAX_BOUNCES)
+            .map_err(usage)?;
+        limits::finite_in("weight", self.integrator.weight_cutoff, 0.0, f32::MAX).map_err(usage)?;
+        if let Some((t0, t1, _)) = &self.depth {
+            for t in [*t0, *t1] {
+                limits::finite_in("depth", t, f32::MIN, f32::MAX).map_err(usage)?;
+            }
+        }
+        if let Some(s) = &self.sampler {
+            let spp = s.spp();
+            limits::int_in("samples per pixel", spp, 1, limits::MAX_SAMPLES).map_err(usage)?;
+        }
+        if let Some(a) = &self.adaptive {
+            limits::finite_in("adaptive threshold", a.threshold, 0.0, f32::MAX).map_err(usage)?;
+        }
+        self.filter
+            .validate()
+            .map_err(|e| usage(format!("filter: {e}")))?;
+        Ok(())
+    }
+
+    /// The zoomed views (`-render_samples`, `-render_filter`) are `zoom²`
+    /// times the image: their size must fit memory and their format too.
+    fn check_views(&self) -> Result<(), JobError> {
+        let views = [
+            (self.samples_view.as_ref(), 0),
+            (self.filter_view.as_ref(), 1),
+        ];
+        for (view, border) in views {
+            let Some((path, zoom)) = view else { continue };
+            let side = |n: u32| u64::from(n) * u64::from((*zoom).max(1)) + border;
+            let (w, h) = (side(self.width), side(self.height));
+            let (Ok(w), Ok(h)) = (u32::try_from(w), u32::try_from(h)) else {
+                return Err(JobError::Usage(format!(
+                    "{}: a {w}x{h} view is too large; choose a smaller zoom",
+                    path.display()
+                )));
+            };
+            check_frame_memory(w, h, available_memory())?;
+            check_image(path, w, h)?;
+        }
+        Ok(())
+    }
+
+    /// Refuses the job if an output is one of `inputs` or another output,
+    /// however either is spelled (links, `..`, hard links).
+    pub fn check_clashes(&self, inputs: &[PathBuf]) -> Result<(), JobError> {
+        let outputs: Vec<(String, PathBuf, FileIdentity)> = self
+            .outputs()
+            .into_iter()
+            .map(|(what, p)| {
+                let id = FileIdentity::of(&p);
+                (what, p, id)
+            })
+            .collect();
+        let refuse = |path: &Path, reason: String| {
+            JobError::Output(OutputError::Refused {
+                path: path.into(),
+                reason,
+            })
+        };
+        for input in inputs {
+            let id = FileIdentity::of(input);
+            if let Some((what, p, _)) = outputs.iter().find(|o| o.2.same(&id)) {
+                return Err(refuse(
+                    p,
+                    format!(
+                        "the {what} would overwrite the input file {}; choose another name",
+                        input.display()
+                    ),
+                ));
+            }
+        }
+        for (i, (what, p, id)) in outputs.iter().enumerate() {
+            if let Some((other, _, _)) = outputs[..i].iter().find(|o| o.2.same(id)) {
+                return Err(refuse(
+                    p,
+                    format!("the {other} and the {what} are the same file; choose two names"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// A job with the course's defaults (no outputs yet).
     pub fn new(input: PathBuf, width: u32, height: u32) -> Self {
         Self {
@@ -214,6 +453,7 @@ impl Job {
             filter_view: None,
             samples_image: None,
             cost_image: None,
+            piece: None,
             cancel: None,
             progress: false,
             stats_json: None,
@@ -269,15 +509,9 @@ impl Job {
 
     /// Loads, renders and writes every requested image.
     pub fn run(&self) -> Result<Report, JobError> {
-        if self.width == 0 || self.height == 0 {
-            return Err(JobError::Usage(format!(
-                "image size {}x{}: width and height must be at least 1",
-                self.width, self.height
-            )));
-        }
-        check_frame_memory(self.width, self.height, available_memory())?;
-        for path in self.image_paths() {
-            check_path(path)?;
+        self.preflight()?;
+        if let Some(p) = &self.piece {
+            self.check_piece(p)?;
         }
         if self.cost_image.is_some() && self.adaptive.is_some() {
             return Err(JobError::Usage(
@@ -285,7 +519,9 @@ impl Job {
             ));
         }
         let t_load = Instant::now();
-        let scene = load_scene(&self.input)?;
+        let (scene, files) = load_scene_files(&self.input)?;
+        // The meshes are known now; nothing has been written yet.
+        self.check_clashes(&files)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
         let mut voxels = None;
         let scene = match self.visualize_grid {
@@ -294,7 +530,9 @@ impl Job {
                     AccelKind::Grid { res } => res,
                     _ => None,
                 };
-                let v = voxelize(&World::build(&scene, self.build), res);
+                // World space: the cells become geometry of a new scene in
+                // the scene's own coordinates.
+                let v = voxelize(&World::build_world_space(&scene, self.build), res);
                 let cells = v.scene(&scene, view);
                 voxels = Some((v, view));
                 cells
@@ -304,7 +542,7 @@ impl Job {
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
-        let camera = CameraModel::new(&scene.camera).with_lens(scene.effects.lens);
+        let camera = CameraModel::new(&world.camera).with_lens(scene.effects.lens);
         let samples = self.effect_samples.apply(scene.effects.samples);
         let mut integrator = self.integrator;
         integrator.shadow_samples = samples.shadow;
@@ -323,7 +561,14 @@ impl Job {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.threads.unwrap_or(0))
             .build()
-            .map_err(|e| JobError::Internal(e.to_string()))?;
+            .map_err(|e| {
+                let n = self
+                    .threads
+                    .map_or_else(|| "one per core".to_owned(), |n| n.to_string());
+                JobError::Internal(format!(
+                    "could not start the worker threads ({n}): {e}; try fewer with --threads/-threads"
+                ))
+            })?;
         let bar = self
             .progress
             .then(|| progress_bar(u64::from(self.width) * u64::from(self.height)));
@@ -338,12 +583,15 @@ impl Job {
         };
         let settings = self.effect_settings(&scene, samples);
         let start = Instant::now();
-        let rendered = pool.install(|| {
-            if self.ao_image {
-                render_image(&world, &camera, &ao_integrator, &settings, control)
-            } else {
-                render_image(&world, &camera, &integrator, &settings, control)
+        let rendered = pool.install(|| match (&self.piece, self.ao_image) {
+            (Some(p), false) => {
+                render_region(&world, &camera, &integrator, &settings, control, p.rect)
             }
+            (Some(p), true) => {
+                render_region(&world, &camera, &ao_integrator, &settings, control, p.rect)
+            }
+            (None, false) => render_image(&world, &camera, &integrator, &settings, control),
+            (None, true) => render_image(&world, &camera, &ao_integrator, &settings, control),
         });
         let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();
@@ -357,9 +605,31 @@ impl Job {
             legend(&mut canvas, v.max_count());
             frame.color = canvas.pixels;
         }
-        let complete = frame.is_complete();
+        let complete = match &self.piece {
+            Some(p) => (p.rect.row0..p.rect.row1).all(|r| frame.complete[r as usize]),
+            None => frame.is_complete(),
+        };
         let (w, h) = (self.width, self.height);
         let mut written = Vec::new();
+        if let (Some(out), Some(p)) = (&self.output, &self.piece) {
+            let out = if complete {
+                out.clone()
+            } else {
+                partial_path(out)
+            };
+            let hash = self.piece_hash(&scene, &settings);
+            let stats = serde_json::json!({
+                "rays_primary": counters.primary,
+                "rays_shadow": counters.shadow,
+                "rays_reflected": counters.reflected,
+                "rays_refracted": counters.refracted,
+                "intersection_tests": counters.intersection_tests,
+                "nodes_visited": counters.nodes_visited,
+                "render_ms": render_time.as_secs_f64() * 1e3,
+            });
+            crate::piece::write(&out, &frame, p, &hash, &stats)?;
+            written.push(out);
+        }
         let mut write_sized = |out: &PathBuf,
                                (w, h): (u32, u32),
                                pixels: &[crate::math::Vec3]|
@@ -375,8 +645,10 @@ impl Job {
         };
         let mut write =
             |out: &PathBuf, pixels: &[crate::math::Vec3]| write_sized(out, (w, h), pixels);
-        if let Some(out) = &self.output {
-            write(out, &frame.color)?;
+        if self.piece.is_none() {
+            if let Some(out) = &self.output {
+                write(out, &frame.color)?;
+            }
         }
         if let Some((t0, t1, out)) = &self.depth {
             write(out, &frame.depth_image(*t0, *t1))?;
@@ -418,12 +690,7 @@ impl Job {
         if let Some(path) = &self.stats_json {
             let text = serde_json::to_string_pretty(&report.stats())
                 .map_err(|e| JobError::Internal(e.to_string()))?;
-            std::fs::write(path, text + "\n").map_err(|e| {
-                JobError::Output(OutputError::Io {
-                    path: path.clone(),
-                    message: e.to_string(),
-                })
-            })?;
+            write_file(path, (text + "\n").as_bytes())?;
         }
         Ok(report)
     }
@@ -542,20 +809,12 @@ pub struct Stats {
 /// `f32`) that exist until the merge.
 pub const FRAME_BYTES_PER_PIXEL: u64 = 12 + 4 + 12 + 4 + 16 + 16;
 
-/// Memory assumed available where `/proc/meminfo` cannot be read.
-pub const FALLBACK_AVAILABLE: u64 = 16 << 30;
+pub use crate::limits::FALLBACK_AVAILABLE;
 
-/// Bytes the system can give this process now: `MemAvailable` from
-/// `/proc/meminfo` on Linux, else [`FALLBACK_AVAILABLE`].
+/// Bytes this process can allocate now: see [`limits::available_memory`]
+/// (`MemAvailable`, and the address-space limit if one is set).
 pub fn available_memory() -> u64 {
-    std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|s| {
-            let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
-            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-            kib.checked_mul(1024)
-        })
-        .unwrap_or(FALLBACK_AVAILABLE)
+    limits::available_memory()
 }
 
 /// Refuses, before anything is allocated, an image whose frame planes would

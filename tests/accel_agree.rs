@@ -179,7 +179,47 @@ fn mixed(r: &mut Rng) -> Node {
             offset: r.range(-6.0, 6.0),
         }));
     }
+    // Drawn after everything above, so the scenes' other contents are as
+    // before: an axis-aligned plane (bounded along its normal) and a deep
+    // tree of transformed groups (the modeling hierarchy `bvh-hierarchy`
+    // follows).
+    if r.chance(0.3) {
+        let mut normal = Vec3::ZERO;
+        normal[r.below(3)] = if r.chance(0.5) { 1.0 } else { -2.0 };
+        kids.push(shape(Shape::Plane {
+            normal,
+            offset: r.range(-6.0, 6.0),
+        }));
+    }
+    if r.chance(0.5) {
+        let depth = 3 + r.below(3) as u32;
+        kids.push(deep_tree(r, depth));
+    }
     Node::Group(kids)
+}
+
+/// A binary tree of transformed groups `depth` levels deep, with a sphere
+/// or a small mesh at each leaf; mild matrices (some non-uniform or
+/// mirroring) so that it stays a few units across.
+fn deep_tree(r: &mut Rng, depth: u32) -> Node {
+    if depth == 0 {
+        return if r.chance(0.4) {
+            sphere(r.v(-0.5, 0.5), r.range(0.1, 0.6))
+        } else {
+            let n = 3 + r.below(12);
+            shape(Shape::Mesh(random_mesh(r, Vec3::ZERO, 0.7, 8, n)))
+        };
+    }
+    let scale = match r.below(3) {
+        0 => Vec3::splat(r.range(0.6, 1.0)),
+        1 => Vec3::new(r.range(0.6, 1.1), r.range(0.6, 1.1), r.range(0.6, 1.1)),
+        _ => Vec3::new(-r.range(0.7, 1.0), r.range(0.7, 1.0), r.range(0.7, 1.0)),
+    };
+    let m = Mat4::from_translation(r.v(-1.5, 1.5))
+        * Mat4::from_axis_angle(r.unit(), r.range(0.0, 6.3))
+        * Mat4::from_scale(scale);
+    let kids = (0..2).map(|_| deep_tree(r, depth - 1)).collect();
+    xf(m, Node::Group(kids))
 }
 
 /// Everything in one plane `z = c`: the bounds have zero thickness.
@@ -564,6 +604,37 @@ fn unflattened_worlds() {
     check(AccelKind::Grid { res: None }, false);
 }
 
+#[test]
+fn octree_inner() {
+    let (a, b) = check(AccelKind::OctreeInner, true);
+    assert!(a.intersection_tests < b.intersection_tests);
+}
+
+#[test]
+fn nested_grid() {
+    let (a, b) = check(AccelKind::NESTED_GRID, true);
+    assert!(a.intersection_tests < b.intersection_tests);
+    for (threshold, depth) in [(1, 3), (4, 1)] {
+        check(AccelKind::NestedGrid { threshold, depth }, true);
+    }
+}
+
+#[test]
+fn bvh_hierarchy() {
+    let (a, b) = check(AccelKind::BvhHierarchy, true);
+    assert!(a.intersection_tests < b.intersection_tests);
+}
+
+/// The new accelerators over `Transformed` wrappers; the hierarchy BVH then
+/// carries rays into its transform nodes' spaces.
+#[test]
+fn unflattened_new_accelerators() {
+    let (a, b) = check(AccelKind::BvhHierarchy, false);
+    assert!(a.intersection_tests < b.intersection_tests);
+    check(AccelKind::OctreeInner, false);
+    check(AccelKind::NESTED_GRID, false);
+}
+
 /// Cost of each accelerator on two 10k-triangle scenes, from the counters:
 /// `cargo test --release --test accel_agree cost_report -- --ignored --nocapture`.
 #[test]
@@ -614,6 +685,9 @@ fn cost_report() {
             AccelKind::Bvh(Split::Midpoint),
             AccelKind::Bvh(Split::Median),
             AccelKind::Bvh(Split::Sah),
+            AccelKind::OctreeInner,
+            AccelKind::NESTED_GRID,
+            AccelKind::BvhHierarchy,
         ];
         let mut rq = Rng::new(5);
         let probe = World::build(&sc, BuildOptions::default());

@@ -286,7 +286,7 @@ fn render_with(
     seed: u64,
 ) -> Vec<Vec3> {
     let world = World::build(sc, BuildOptions::default());
-    let cam = CameraModel::new(&sc.camera).with_lens(sc.effects.lens);
+    let cam = CameraModel::new(&world.camera).with_lens(sc.effects.lens);
     let mut s = Settings::one_ray((size, size), PixelOffset::CENTER);
     s.sampler = Sampler::new(kind, spp, seed);
     render_image(&world, &cam, integrator, &s, Control::default())

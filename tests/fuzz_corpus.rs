@@ -54,3 +54,9 @@ fn obj_loader_corpus_never_panics() {
     let n = replay("obj_loader", exercise::obj);
     assert!(n >= 10, "only {n} OBJ inputs");
 }
+
+#[test]
+fn job_args_corpus_never_panics() {
+    let n = replay("job_args", exercise::job_args);
+    assert!(n >= 10, "only {n} command lines");
+}

@@ -4,7 +4,7 @@
 mod common;
 use glint::format::load_scene;
 use glint::integrator::{NoObserver, RayKind, RayRecorder, Whitted};
-use glint::math::{offset_origin, Ray, Vec2, Vec3};
+use glint::math::{Ray, Vec2, Vec3};
 use glint::render::{render, CameraModel, PixelOffset};
 use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape};
 use glint::stats::Counters;
@@ -59,7 +59,7 @@ fn secondary_rays_never_rehit_their_own_surface() {
         let name = path.display();
         let scene = load_scene(path).unwrap();
         let world = World::build(&scene, BuildOptions::default());
-        let cam = CameraModel::new(&scene.camera);
+        let cam = CameraModel::new(&world.camera);
         let mut c = Counters::default();
         for _ in 0..400 {
             let s = Vec2::new(rng.next(), rng.next());
@@ -68,7 +68,7 @@ fn secondary_rays_never_rehit_their_own_surface() {
             };
             for _ in 0..8 {
                 let d = rng.dir();
-                let r = Ray::new(offset_origin(h.point, h.normal, d), d);
+                let r = h.spawn_ray(d);
                 if let Some(h2) = world.intersect(&r, 0.0, f32::INFINITY, &mut c) {
                     let flat = !matches!(
                         world.prims[h.prim as usize].shape,
@@ -136,10 +136,10 @@ fn floor_scene(glass: Phong) -> Scene {
 /// eye ray does not pass through the sphere.
 fn floor_below_sphere(scene: &Scene, w: Whitted) -> Vec3 {
     let world = World::build(scene, BuildOptions::default());
-    let eye = Ray::new(
+    let eye = world.ray_from_world(&Ray::new(
         Vec3::new(0.0, 0.1, 3.0),
         Vec3::new(0.0, -0.1, -3.0).normalize(),
-    );
+    ));
     let (c, hit) = w.trace(
         &world,
         &eye,
@@ -151,7 +151,7 @@ fn floor_below_sphere(scene: &Scene, w: Whitted) -> Vec3 {
         &mut NoObserver,
     );
     assert!(
-        hit.unwrap().point.length() < 1e-3,
+        world.point_to_world(hit.unwrap().point).length() < 1e-3,
         "the eye ray should hit the floor at the origin"
     );
     c
@@ -228,7 +228,7 @@ fn count_reflections(w: Whitted) -> (u32, Vec3) {
     let scene = mirror_box();
     let world = World::build(&scene, BuildOptions::default());
     let mut rec = RayRecorder::default();
-    let eye = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.2).normalize());
+    let eye = world.ray_from_world(&Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.2).normalize()));
     let (c, _) = w.trace(
         &world,
         &eye,
@@ -292,7 +292,7 @@ fn back_faces_are_black_unless_shade_back() {
     }];
     scene.root = sphere(Vec3::ZERO, 3.0, 0);
     let world = World::build(&scene, BuildOptions::default());
-    let cam = CameraModel::new(&scene.camera);
+    let cam = CameraModel::new(&world.camera);
     let px = |w: &Whitted| {
         let (f, _) = render(&world, &cam, w, (3, 3), PixelOffset::CENTER);
         f.color[4]

@@ -197,6 +197,9 @@ fn assignment6_with_every_accelerator() {
         "bvh-sah",
         "bvh-median",
         "bvh-midpoint",
+        "nested-grid",
+        "octree-inner",
+        "bvh-hierarchy",
     ] {
         let lines = plain_lines(&data, "A6_cmd.txt")
             .into_iter()

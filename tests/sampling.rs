@@ -19,10 +19,9 @@ use glint::world::{BuildOptions, World};
 use std::path::Path;
 
 fn world_of(scene: &Scene) -> (World, CameraModel) {
-    (
-        World::build(scene, BuildOptions::default()),
-        CameraModel::new(&scene.camera),
-    )
+    let world = World::build(scene, BuildOptions::default());
+    let camera = CameraModel::new(&world.camera);
+    (world, camera)
 }
 
 fn render(world: &World, cam: &CameraModel, w: &Whitted, s: &Settings) -> (Frame, Counters) {

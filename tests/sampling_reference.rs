@@ -27,7 +27,10 @@
 //!    1/(2·1.7²), as it should). Suspect references.
 //! 4. scene7_01's hypotenuse lies on `x + y = 0`, through lattice sample
 //!    points, so at 12×12 a few edge pixels flip with rounding (each is 0.7%
-//!    of the image).
+//!    of the image). The watertight triangle test (`docs/numerics.md`)
+//!    computes the edge functions exactly, so a sample exactly on the edge
+//!    counts as inside; Möller–Trumbore's rounding decided some of them the
+//!    other way.
 //! 5. The checkerboard scenes carry the reference's texture quirks (see
 //!    `tests/reference_images.rs`), hence their wide bounds.
 
@@ -114,15 +117,15 @@ const DETERMINISTIC: &[(&str, f64, f64, &str)] = &[
     ),
     (
         "output7_01e_low_res.tga",
-        2.2,
-        0.025,
-        "hypotenuse ties at 12x12 (measured 1.97, 2.08%)",
+        2.3,
+        0.030,
+        "hypotenuse ties at 12x12; the watertight triangle test counts samples exactly on the edge as inside, one pixel more than before (measured 2.08, 2.78%)",
     ),
     (
         "output7_01f_low_res.tga",
         5.7,
-        0.018,
-        "gaussian 2-sigma cut, hypotenuse ties (measured 5.14, 1.39%)",
+        0.023,
+        "gaussian 2-sigma cut, hypotenuse ties; watertight edge ties flip one pixel more than before (measured 5.24, 2.08%)",
     ),
     (
         "output7_02d.tga",

@@ -132,7 +132,7 @@ fn reference_quirks(scene: &Scene) -> (Scene, Scene) {
 /// `step`-th pixel of a `w`×`h` image (rows top first).
 fn trace_points(scene: &Scene, integrator: &Whitted, (w, h): (u32, u32), step: u32) -> Vec<Vec3> {
     let world = World::build(scene, BuildOptions::default());
-    let camera = CameraModel::new(&scene.camera);
+    let camera = CameraModel::new(&world.camera);
     let rows: Vec<u32> = (0..h).step_by(step as usize).collect();
     rows.par_iter()
         .flat_map_iter(|&row| {
@@ -418,7 +418,7 @@ fn object_space_textures_follow_their_object() {
             texture_space: space,
             ..Whitted::default()
         };
-        let ray = Ray::new(Vec3::new(x, 0.5, 5.0), Vec3::NEG_Z);
+        let ray = world.ray_from_world(&Ray::new(Vec3::new(x, 0.5, 5.0), Vec3::NEG_Z));
         w.trace(
             &world,
             &ray,

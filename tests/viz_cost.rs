@@ -13,7 +13,6 @@ use glint::world::{BuildOptions, World};
 #[test]
 fn per_pixel_costs_sum_to_the_totals() {
     let scene = glint::format::load_scene(&own_scene("whitted.txt")).unwrap();
-    let camera = CameraModel::new(&scene.camera);
     let integrator = Whitted {
         bounces: 3,
         weight_cutoff: 0.01,
@@ -34,6 +33,7 @@ fn per_pixel_costs_sum_to_the_totals() {
                 flatten: true,
             },
         );
+        let camera = CameraModel::new(&world.camera);
         for spp in [1, 4] {
             let mut settings = Settings::one_ray((37, 23), PixelOffset::CENTER);
             if spp > 1 {

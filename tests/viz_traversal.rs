@@ -278,3 +278,50 @@ fn structure_command_and_course_stats_report() {
         assert!(text.contains(want), "{want:?} missing from\n{text}");
     }
 }
+
+/// The traversal views record the lecture's other choices too, through the
+/// same searches the renderer runs: the recorded search finds brute force's
+/// hit, and what it records is plausible (the nested grid's cells come
+/// front to back along the ray, the octree-inner walk shows its inner nodes,
+/// the hierarchy's first box is the root's).
+#[test]
+fn new_accelerators_are_recorded() {
+    use glint::accel::{AccelKind, Aggregate};
+    use glint::viz::traversal::Structure;
+    let world = world();
+    // The oracle: brute force over the same bounded primitives (the view,
+    // like the aggregate, leaves the planes to the world).
+    let brute = glint::accel::Brute::new(&world.prims, bounded(&world));
+    let b = world.bounds();
+    let (centre, size) = (b.center(), b.extent().max_element());
+    for kind in [
+        AccelKind::NESTED_GRID,
+        AccelKind::OctreeInner,
+        AccelKind::BvhHierarchy,
+    ] {
+        let s = Structure::build(&world, kind).expect("a recorded structure");
+        let mut r = Rng(0x2545f4914f6cdd1d);
+        let (mut inner, mut hits) = (0, 0);
+        for _ in 0..300 {
+            let ray = random_ray(&mut r, centre, size);
+            let (hit, visits) = s.trace(&world, &ray, 0.0);
+            let want = brute.intersect(
+                &world.prims,
+                &ray,
+                0.0,
+                f32::INFINITY,
+                &mut Counters::default(),
+            );
+            assert_eq!(hit.map(|h| h.prim), want.map(|h| h.prim), "{kind}");
+            hits += hit.is_some() as u32;
+            inner += visits.iter().filter(|v| !v.leaf).count();
+            if kind == AccelKind::BvhHierarchy {
+                if let Some(first) = visits.first() {
+                    assert!(first.bounds.extent().max_element() >= 0.9 * size, "{kind}");
+                }
+            }
+        }
+        assert!(hits > 30, "{kind}: {hits} hits");
+        assert!(inner > 0, "{kind} recorded no inner box");
+    }
+}

@@ -61,6 +61,10 @@ impl Aggregate for Brute {
         self.bounds
     }
 
+    fn memory_bytes(&self) -> usize {
+        self.ids.len() * 4
+    }
+
     fn describe(&self) -> String {
         "none".into()
     }

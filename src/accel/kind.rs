@@ -34,6 +34,29 @@ pub enum AccelKind {
     Octree,
     /// A binary bounding-volume hierarchy.
     Bvh(Split),
+    /// The octree with the other storage policy: a primitive that straddles
+    /// a split plane stays at the inner node and is tested whenever a ray
+    /// enters that node (`octree-inner`).
+    OctreeInner,
+    /// A coarse uniform grid whose crowded cells hold finer grids
+    /// (`nested-grid[:THRESHOLD[:DEPTH]]`).
+    NestedGrid {
+        /// A cell holding more than this many primitives gets a finer grid.
+        threshold: u32,
+        /// Most levels of finer grids below the coarse one.
+        depth: u32,
+    },
+    /// A BVH whose inner nodes are the scene's own groups and transforms
+    /// (`bvh-hierarchy`); a mesh's triangles are split by the median.
+    BvhHierarchy,
+}
+
+impl AccelKind {
+    /// `nested-grid` with its default parameters.
+    pub const NESTED_GRID: AccelKind = AccelKind::NestedGrid {
+        threshold: 16,
+        depth: 2,
+    };
 }
 
 impl Default for AccelKind {
@@ -45,7 +68,7 @@ impl Default for AccelKind {
 impl AccelKind {
     /// Every accepted name, for help texts (`grid:NxNxN` and `grid:N` are
     /// accepted too and fix the resolution).
-    pub const NAMES: [&'static str; 7] = [
+    pub const NAMES: [&'static str; 10] = [
         "none",
         "grid",
         "octree",
@@ -53,13 +76,16 @@ impl AccelKind {
         "bvh-sah",
         "bvh-median",
         "bvh-midpoint",
+        "octree-inner",
+        "nested-grid",
+        "bvh-hierarchy",
     ];
 }
 
 /// A name [`AccelKind::from_str`] does not know.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown accelerator `{0}` (expected none, grid, grid:NxNxN, octree, bvh, bvh-sah, bvh-median or bvh-midpoint)"
+    "unknown accelerator `{0}` (expected none, grid, grid:NxNxN, octree, bvh, bvh-sah, bvh-median, bvh-midpoint, octree-inner, nested-grid, nested-grid:THRESHOLD[:DEPTH] or bvh-hierarchy)"
 )]
 pub struct ParseAccelError(pub String);
 
@@ -68,7 +94,8 @@ impl FromStr for AccelKind {
 
     /// `none | grid | octree | bvh | bvh-sah | bvh-median | bvh-midpoint`
     /// (case-insensitive; `bvh` is `bvh-sah`), and `grid:NxNxN` or `grid:N`
-    /// for a fixed grid resolution.
+    /// for a fixed grid resolution; `octree-inner`, `bvh-hierarchy`, and
+    /// `nested-grid[:THRESHOLD[:DEPTH]]` (defaults 16 and 2).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let err = || ParseAccelError(s.to_string());
         let name = s.trim().to_ascii_lowercase();
@@ -79,6 +106,10 @@ impl FromStr for AccelKind {
             "bvh" | "bvh-sah" => AccelKind::Bvh(Split::Sah),
             "bvh-median" => AccelKind::Bvh(Split::Median),
             "bvh-midpoint" => AccelKind::Bvh(Split::Midpoint),
+            "octree-inner" | "octree:inner" => AccelKind::OctreeInner,
+            "bvh-hierarchy" => AccelKind::BvhHierarchy,
+            "nested-grid" => AccelKind::NESTED_GRID,
+            other if other.starts_with("nested-grid:") => parse_nested(other).ok_or_else(err)?,
             other => {
                 let res = other.strip_prefix("grid:").ok_or_else(err)?;
                 let n: Vec<u32> = res
@@ -97,6 +128,25 @@ impl FromStr for AccelKind {
     }
 }
 
+/// Most levels of finer grids `nested-grid:T:D` accepts.
+const MAX_NESTING: u32 = 8;
+
+/// `nested-grid:T` or `nested-grid:T:D` (T ≥ 1, 1 ≤ D ≤ [`MAX_NESTING`]).
+fn parse_nested(s: &str) -> Option<AccelKind> {
+    let nums: Vec<u32> = s
+        .strip_prefix("nested-grid:")?
+        .split(':')
+        .map(|v| v.trim().parse().ok())
+        .collect::<Option<_>>()?;
+    let (threshold, depth) = match nums[..] {
+        [t] => (t, 2),
+        [t, d] => (t, d),
+        _ => return None,
+    };
+    (threshold > 0 && (1..=MAX_NESTING).contains(&depth))
+        .then_some(AccelKind::NestedGrid { threshold, depth })
+}
+
 impl fmt::Display for AccelKind {
     /// The canonical name, which [`AccelKind::from_str`] reads back.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -108,6 +158,12 @@ impl fmt::Display for AccelKind {
             } => write!(f, "grid:{x}x{y}x{z}"),
             AccelKind::Octree => f.write_str("octree"),
             AccelKind::Bvh(s) => write!(f, "bvh-{s}"),
+            AccelKind::OctreeInner => f.write_str("octree-inner"),
+            AccelKind::BvhHierarchy => f.write_str("bvh-hierarchy"),
+            k if *k == AccelKind::NESTED_GRID => f.write_str("nested-grid"),
+            AccelKind::NestedGrid { threshold, depth } => {
+                write!(f, "nested-grid:{threshold}:{depth}")
+            }
         }
     }
 }
@@ -153,8 +209,40 @@ mod tests {
     }
 
     #[test]
+    fn new_names_parse() {
+        assert_eq!("octree:inner".parse(), Ok(AccelKind::OctreeInner));
+        assert_eq!("nested-grid".parse(), Ok(AccelKind::NESTED_GRID));
+        assert_eq!(
+            "nested-grid:4".parse(),
+            Ok(AccelKind::NestedGrid {
+                threshold: 4,
+                depth: 2
+            })
+        );
+        let k = AccelKind::NestedGrid {
+            threshold: 30,
+            depth: 3,
+        };
+        assert_eq!("nested-grid:30:3".parse(), Ok(k));
+        assert_eq!(k.to_string().parse::<AccelKind>(), Ok(k));
+    }
+
+    #[test]
     fn bad_names_are_errors() {
-        for bad in ["kd", "grid:", "grid:0", "grid:1x2", "grid:axbxc", ""] {
+        for bad in [
+            "kd",
+            "grid:",
+            "grid:0",
+            "grid:1x2",
+            "grid:axbxc",
+            "",
+            "nested-grid:",
+            "nested-grid:0",
+            "nested-grid:4:0",
+            "nested-grid:4:9",
+            "nested-grid:4:2:1",
+            "nested-grid:x",
+        ] {
             assert!(bad.parse::<AccelKind>().is_err(), "{bad}");
         }
     }

@@ -8,6 +8,8 @@
 //! | [`grid`]    | uniform grid, cells as offsets + flat list  | 3DDDA, an iterator of cells   |
 //! | [`octree`]  | adaptive grid, primitives in the leaves     | front-to-back, an iterator of leaves |
 //! | [`bvh`]     | binary BVH (midpoint, median or binned SAH) | stack, nearer child first     |
+//! | [`nested_grid`] | coarse grid, crowded cells hold finer grids | 3DDDA at each level       |
+//! | [`hierarchy`] | BVH of the scene's own groups and transforms | stack, nearest entry first  |
 //!
 //! Three rules every accelerator follows, so that each returns *exactly* the
 //! hit brute force returns:
@@ -28,8 +30,10 @@
 mod brute;
 pub mod bvh;
 pub mod grid;
+pub mod hierarchy;
 mod kind;
 mod mailbox;
+pub mod nested_grid;
 pub mod octree;
 mod overlap;
 #[cfg(test)]
@@ -38,8 +42,10 @@ pub(crate) mod testutil;
 pub use brute::Brute;
 pub use bvh::Bvh;
 pub use grid::Grid;
+pub use hierarchy::{HierarchyBvh, SceneTree};
 pub use kind::{AccelKind, ParseAccelError, Split};
-pub use octree::Octree;
+pub use nested_grid::NestedGrid;
+pub use octree::{Octree, Storage};
 
 use crate::math::{Aabb, Ray};
 use crate::primitive::Primitive;
@@ -83,4 +89,10 @@ pub trait Aggregate: Send + Sync {
 
     /// Name and parameters, for statistics (`"bvh-sah"`, `"grid 10x10x7"`).
     fn describe(&self) -> String;
+
+    /// Bytes of the structure itself (nodes, cells, id lists; not the
+    /// primitives), for `glint bench`. 0 when an aggregate does not say.
+    fn memory_bytes(&self) -> usize {
+        0
+    }
 }

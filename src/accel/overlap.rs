@@ -35,12 +35,21 @@ pub(crate) fn boxes_overlap(a: &Aabb, b: &Aabb) -> bool {
 /// Conservative: false only when the shape certainly misses the box.
 /// Triangles use the separating-axis test and spheres the distance to the
 /// box, which keep a long diagonal triangle or a big sphere out of the cells
-/// its box covers but it does not; anything else uses its bounding box.
+/// its box covers but it does not (a transformed triangle by its transformed
+/// vertices); anything else uses its bounding box.
 /// Callers pad `b` by [`margin`], which absorbs the rounding of these tests.
 pub(crate) fn shape_overlaps(shape: &Shape, b: &Aabb) -> bool {
     match shape {
         Shape::Triangle(t) => triangle_box(t.vertices(), b),
         Shape::Sphere(s) => sphere_box(s, b),
+        // An unflattened triangle is still a triangle in world space: its
+        // transformed vertices give the exact test, as for a baked one.
+        Shape::Transformed(x) => match &x.shape {
+            Shape::Triangle(t) => {
+                triangle_box(t.vertices().map(|p| x.to_world.transform_point3(p)), b)
+            }
+            _ => boxes_overlap(&x.bounds(), b),
+        },
         other => boxes_overlap(&other.bounds(), b),
     }
 }
@@ -110,6 +119,22 @@ mod tests {
             Vec3::new(0.0, 0.0, 0.5),
         ];
         assert!(triangle_box(near, &unit_box()));
+    }
+
+    #[test]
+    fn transformed_triangle_uses_its_world_vertices() {
+        use crate::math::Mat4;
+        use crate::shape::{Transformed, Triangle};
+        // The object triangle of the test above, moved by a translation.
+        let m = Mat4::from_translation(Vec3::new(1.0, 1.0, 0.0));
+        let t = Triangle::new(
+            Vec3::new(3.0, -1.0, -1.0),
+            Vec3::new(-1.0, 3.0, -1.0),
+            Vec3::new(-1.0, 3.0, 0.0),
+        );
+        let x = Shape::Transformed(Box::new(Transformed::new(Shape::Triangle(t), m).unwrap()));
+        assert!(boxes_overlap(&x.bounds(), &unit_box()));
+        assert!(!shape_overlaps(&x, &unit_box()));
     }
 
     #[test]

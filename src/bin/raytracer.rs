@@ -3,6 +3,7 @@
 
 use glint::accel::AccelKind;
 use glint::job::Job;
+use glint::limits;
 use glint::material::TextureSpace;
 use glint::render::{Adaptive, Filter, GridLayout, PixelOffset, Sampler, SamplerKind};
 use glint::viz::grid::GridView;
@@ -43,18 +44,18 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-bounces",
         "N",
-        "maximum reflection/refraction depth (default 0)",
+        "maximum reflection/refraction depth, 0 to 64 (default 0)",
     ),
     (
         "-weight",
         "W",
-        "prune ray-tree branches contributing less than W (default 0)",
+        "prune ray-tree branches contributing less than W >= 0 (default 0)",
     ),
     ("-grid", "NX NY NZ", "use a uniform grid of this resolution"),
     (
         "-accel",
         "NAME",
-        "none, grid, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint",
+        "none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
     ),
     (
         "-no_flatten",
@@ -72,7 +73,11 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "print the course's statistics report (time, rays, intersections, cells)",
     ),
     ("-stats_json", "FILE", "write the statistics as JSON"),
-    ("-threads", "N", "worker threads (default: all cores)"),
+    (
+        "-threads",
+        "N",
+        "worker threads, 1 to 1024 (default: all cores)",
+    ),
     ("-quiet", "", "no progress bar"),
     (
         "-gui",
@@ -188,7 +193,7 @@ fn real_main() -> ExitCode {
     let (mut job, stats) = match parse(&args) {
         Ok(j) => j,
         Err(msg) => {
-            eprintln!("raytracer: {msg}");
+            eprintln!("raytracer: {}", limits::bounded_message(&msg));
             return ExitCode::from(2);
         }
     };
@@ -201,7 +206,7 @@ fn real_main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("raytracer: {e}");
+            eprintln!("raytracer: {}", limits::bounded_message(&e.to_string()));
             ExitCode::from(e.exit_code() as u8)
         }
     }
@@ -235,18 +240,31 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 job.height = number(flag, value("a height")?)?;
             }
             "-depth" => {
-                let t0 = number(flag, value("t0 t1 file")?)?;
-                let t1 = number(flag, value("t1 file")?)?;
+                let t0 = limits::parse_finite(flag, value("t0 t1 file")?, f32::MIN, f32::MAX)?;
+                let t1 = limits::parse_finite(flag, value("t1 file")?, f32::MIN, f32::MAX)?;
                 job.depth = Some((t0, t1, PathBuf::from(value("a file")?)));
             }
             "-normals" => job.normals = Some(PathBuf::from(value("an image file")?)),
             "-shade_back" => job.integrator.shade_back = true,
             "-shadows" => job.integrator.shadows = true,
             "-transparent_shadows" => job.integrator.transparent_shadows = true,
-            "-bounces" => job.integrator.bounces = number(flag, value("a count")?)?,
-            "-weight" => job.integrator.weight_cutoff = number(flag, value("a weight")?)?,
+            "-bounces" => {
+                let n = number(flag, value("a count")?)?;
+                job.integrator.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
+            }
+            "-weight" => {
+                job.integrator.weight_cutoff =
+                    limits::parse_finite(flag, value("a weight")?, 0.0, f32::MAX)?;
+            }
             "-stats" => stats = true,
-            "-threads" => job.threads = Some(number(flag, value("a count")?)?),
+            "-threads" => {
+                let n = number(flag, value("a count")?)?;
+                let (n, note) = limits::threads(flag, n, limits::cores())?;
+                if let Some(note) = note {
+                    eprintln!("raytracer: {note}");
+                }
+                job.threads = Some(n);
+            }
             "-quiet" => quiet = true,
             "-grid" => {
                 let mut res = [0u32; 3];
@@ -262,7 +280,7 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 grid = Some(res);
             }
             "-accel" => {
-                let name = value("none|grid|octree|bvh|bvh-median|bvh-midpoint")?;
+                let name = value("an accelerator name (see -help)")?;
                 accel = Some(
                     name.parse::<AccelKind>()
                         .map_err(|e| format!("-accel: {e}"))?,
@@ -277,7 +295,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                     "object" => TextureSpace::Object,
                     other => {
                         return Err(format!(
-                            "-texture_space: expected world or object, found '{other}'"
+                            "-texture_space: expected world or object, found {}",
+                            limits::shorten(other)
                         ))
                     }
                 }
@@ -343,7 +362,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 }
                 None => {
                     return Err(format!(
-                        "unknown flag '{other}' (raytracer -help lists every flag)"
+                        "unknown flag {} (raytracer -help lists every flag)",
+                        limits::shorten(other)
                     ))
                 }
             },
@@ -382,9 +402,9 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
     Ok((job, stats))
 }
 
+/// A flag's number; the message quotes a bounded part of a bad value.
 fn number<T: std::str::FromStr>(flag: &str, s: &str) -> Result<T, String> {
-    s.parse()
-        .map_err(|_| format!("{flag}: '{s}' is not a valid number"))
+    limits::parse_flag(flag, s)
 }
 
 #[cfg(test)]
@@ -459,6 +479,19 @@ mod tests {
         assert!(accepted.len() >= 20, "{accepted:?}");
     }
 
+    /// `-help` names every accelerator `-accel` accepts.
+    #[test]
+    fn help_lists_every_accelerator() {
+        let text = help();
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("-accel"))
+            .unwrap();
+        for name in AccelKind::NAMES {
+            assert!(line.contains(name), "{name} is not in -help's -accel line");
+        }
+    }
+
     #[test]
     fn sampling_flags() {
         let (j, _) = parse(&args("-input a.txt")).unwrap();
@@ -495,6 +528,34 @@ mod tests {
     fn unknown_flag_is_named() {
         let e = parse(&args("-input a.txt -bogus")).unwrap_err();
         assert!(e.contains("-bogus"));
+    }
+
+    /// Issue 15: `-weight NaN` rendered, `-threads 18446744073709551615` and
+    /// `-bounces 4294967295` hung; a 100 kB value was echoed whole.
+    #[test]
+    fn numbers_out_of_range_are_refused_with_the_flag() {
+        for (line, flag) in [
+            ("-weight NaN", "-weight"),
+            ("-weight inf", "-weight"),
+            ("-weight -0.5", "-weight"),
+            ("-depth nan 1 d.png", "-depth"),
+            ("-depth 1 inf d.png", "-depth"),
+            ("-threads 18446744073709551615", "-threads"),
+            ("-threads 100000", "-threads"),
+            ("-threads 0", "-threads"),
+            ("-bounces 4294967295", "-bounces"),
+        ] {
+            let e = parse(&args(&format!("-input a.txt {line}"))).unwrap_err();
+            assert!(e.starts_with(&format!("{flag}: ")), "{line}: {e}");
+        }
+        let (j, _) = parse(&args("-input a.txt -threads 1000")).unwrap();
+        assert!(j.threads.unwrap() <= 4 * limits::cores());
+        let e = parse(&args(&format!(
+            "-input a.txt -size {} 1",
+            "9".repeat(100_000)
+        )))
+        .unwrap_err();
+        assert!(e.len() < 200, "{} bytes", e.len());
     }
 
     #[test]

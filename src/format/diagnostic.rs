@@ -1,5 +1,6 @@
 //! Positioned parse errors and their rustc-style rendering.
 
+use crate::limits::{is_invisible, push_visible, SNIPPET_CHARS};
 use std::fmt::Write as _;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -23,13 +24,23 @@ pub struct ParseError {
     pub expected: String,
     /// What it found: a quoted token such as `'Sphre'`, or `end of file`.
     pub found: String,
-    /// The text of line `line`, when there is one.
+    /// The text of line `line` (or, for a long line, a window of it around
+    /// `col`, with `…` where it was cut), when there is one.
     pub source_line: Option<String>,
+    /// Columns of line `line` left out before `source_line`'s first column
+    /// (counting a leading `…` as one): the caret goes under
+    /// `col - snippet_offset`.
+    pub snippet_offset: usize,
 }
 
 impl std::fmt::Display for ParseError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}", self.file.display())?;
+        // A file name may hold anything but `/` and NUL, newlines included.
+        let mut file = String::new();
+        for c in self.file.display().to_string().chars() {
+            push_visible(&mut file, c);
+        }
+        write!(f, "{file}")?;
         if self.line > 0 {
             write!(f, ":{}:{}", self.line, self.col)?;
         }
@@ -47,10 +58,14 @@ impl ParseError {
         expected: impl Into<String>,
         found: impl Into<String>,
     ) -> Self {
-        let source_line = line
+        let snippet = line
             .checked_sub(1)
             .and_then(|i| src.split('\n').nth(i))
-            .map(|l| l.trim_end_matches('\r').to_owned());
+            .map(|l| snippet(l.trim_end_matches('\r'), col));
+        let (source_line, snippet_offset) = match snippet {
+            Some((text, offset)) => (Some(text), offset),
+            None => (None, 0),
+        };
         Self {
             file: file.to_owned(),
             line,
@@ -58,6 +73,7 @@ impl ParseError {
             expected: expected.into(),
             found: found.into(),
             source_line,
+            snippet_offset,
         }
     }
 
@@ -71,6 +87,7 @@ impl ParseError {
             // The path leads the message already, in full.
             found: format!("a file that cannot be read ({})", io_reason(err)),
             source_line: None,
+            snippet_offset: 0,
         }
     }
 
@@ -84,23 +101,58 @@ impl ParseError {
         let Some(text) = self.source_line.as_deref().filter(|_| self.line > 0) else {
             return out;
         };
-        let shown: String = text.chars().map(printable).collect();
-        // Copy tabs into the padding so the caret lines up however the
-        // terminal expands them.
-        let pad: String = text
-            .chars()
-            .take(self.col.saturating_sub(1))
-            .map(|c| if c == '\t' { '\t' } else { ' ' })
-            .collect();
+        let col = self.col.saturating_sub(self.snippet_offset).max(1);
+        let width = token_width(text, col);
+        // Invisible characters are shown escaped (`\u{feff}`), so the padding
+        // under each one is as wide as its escape. Tabs are copied into the
+        // padding so the caret lines up however the terminal expands them.
+        let (mut shown, mut pad, mut carets) = (String::new(), String::new(), 0);
+        for (i, c) in text.chars().enumerate() {
+            let before = shown.chars().count();
+            if c == '\t' {
+                shown.push('\t');
+            } else {
+                push_visible(&mut shown, c);
+            }
+            let w = shown.chars().count() - before;
+            if i + 1 < col {
+                pad.extend(std::iter::repeat_n(if c == '\t' { '\t' } else { ' ' }, w));
+            } else if i + 1 < col + width {
+                carets += w;
+            }
+        }
         let _ = writeln!(out, "{gutter} |");
         let _ = writeln!(out, "{} | {shown}", self.line);
-        let _ = writeln!(
-            out,
-            "{gutter} | {pad}{}",
-            "^".repeat(token_width(text, self.col))
-        );
+        let _ = writeln!(out, "{gutter} | {pad}{}", "^".repeat(carets.max(1)));
         out
     }
+}
+
+/// The part of `line` quoted under an error at 1-based `col`: the whole line
+/// if it is short, else [`SNIPPET_CHARS`] characters around the column with
+/// `…` marking each cut, and the number of columns cut before it (a 100 MB
+/// token must not become 100 MB of stderr).
+fn snippet(line: &str, col: usize) -> (String, usize) {
+    // Stop counting once the line is known to be long.
+    if line
+        .chars()
+        .nth(SNIPPET_CHARS + SNIPPET_CHARS / 2)
+        .is_none()
+    {
+        return (line.to_owned(), 0);
+    }
+    let first = col.saturating_sub(1).saturating_sub(SNIPPET_CHARS / 3);
+    let mut text = String::new();
+    if first > 0 {
+        text.push('…');
+    }
+    let mut rest = line.chars().skip(first);
+    text.extend(rest.by_ref().take(SNIPPET_CHARS));
+    if rest.next().is_some() {
+        text.push('…');
+    }
+    // With a leading `…`, the line's column `first + 1` is the snippet's 2nd.
+    (text, first.saturating_sub(1))
 }
 
 /// Width in characters of the token starting at 1-based column `col`, at least 1.
@@ -119,15 +171,6 @@ fn token_width(line: &str, col: usize) -> usize {
     n.max(1)
 }
 
-/// Control characters would garble a terminal; show them as one-column marks.
-fn printable(c: char) -> char {
-    if c.is_control() && c != '\t' {
-        '\u{FFFD}'
-    } else {
-        c
-    }
-}
-
 /// A token as it appears in messages: single-quoted, control characters
 /// escaped, long tokens shortened.
 pub(crate) fn quote(text: &str) -> String {
@@ -138,7 +181,7 @@ pub(crate) fn quote(text: &str) -> String {
             s.push('…');
             break;
         }
-        if c.is_control() || c == '\'' || c == '\\' {
+        if c.is_control() || is_invisible(c) || c == '\'' || c == '\\' {
             s.extend(c.escape_default());
         } else {
             s.push(c);
@@ -158,8 +201,11 @@ pub(crate) fn io_reason(err: &io::Error) -> String {
 }
 
 /// The bytes as UTF-8 text, or an error at the first byte that is not,
-/// which is how binary files are turned away.
+/// which is how binary files are turned away. A UTF-8 byte-order mark, which
+/// some editors write at the start of a file, is skipped (positions count
+/// from the character after it).
 pub(crate) fn decode<'a>(bytes: &'a [u8], file: &Path) -> Result<&'a str, ParseError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     std::str::from_utf8(bytes).map_err(|e| {
         let good = e.valid_up_to();
         // The valid prefix is UTF-8, so it can be searched for the position.
@@ -221,6 +267,56 @@ mod tests {
     fn quote_escapes_and_shortens() {
         assert_eq!(quote("a\u{0}b"), "'a\\u{0}b'");
         assert!(quote(&"x".repeat(100)).ends_with("…'"));
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        // Failed before issue 15: the mark was part of the first token.
+        assert_eq!(
+            decode(b"\xEF\xBB\xBFGroup", Path::new("b.txt")),
+            Ok("Group")
+        );
+    }
+
+    #[test]
+    fn invisible_characters_are_escaped_and_the_caret_still_lines_up() {
+        let src = "a\u{200b}b Sphre";
+        let e = ParseError::at(
+            Path::new("a\nb.txt"),
+            src,
+            1,
+            5,
+            "an object",
+            quote("Sphre"),
+        );
+        let r = e.render();
+        assert!(r.starts_with("a\\u{a}b.txt:1:5:"), "{r}");
+        assert!(r.contains("1 | a\\u{200b}b Sphre\n"), "{r}");
+        assert!(r.contains("  |            ^^^^^\n"), "{r}");
+        assert_eq!(quote("\u{feff}Group"), "'\\u{feff}Group'");
+    }
+
+    #[test]
+    fn a_long_line_is_quoted_in_a_window_with_the_caret_on_the_column() {
+        // Before issue 15 the whole line was echoed (100 MB in, 200 MB out).
+        let line = format!("{} Sphre {}", "x".repeat(1_000_000), "y".repeat(1_000_000));
+        let e = ParseError::at(
+            Path::new("a.txt"),
+            &line,
+            1,
+            1_000_002,
+            "an object",
+            "'Sphre'",
+        );
+        let r = e.render();
+        assert!(r.len() < 1000, "{} bytes", r.len());
+        let lines: Vec<&str> = r.lines().collect();
+        // Columns are characters: the snippet starts with a 3-byte `…`.
+        let caret = lines[3].chars().position(|c| c == '^').unwrap();
+        let quoted: String = lines[2].chars().skip(caret).take(6).collect();
+        assert_eq!(quoted, "Sphre ", "{r}");
+        assert_eq!(lines[3].chars().skip(caret).collect::<String>(), "^^^^^");
+        assert!(lines[2].contains('…'));
     }
 
     #[test]

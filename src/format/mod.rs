@@ -6,27 +6,46 @@
 //! and column; no input makes these readers panic.
 
 mod diagnostic;
+mod input;
 mod mit6837;
 pub mod obj;
 
 pub use diagnostic::ParseError;
 
 use crate::scene::Scene;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Reads a scene file; meshes are resolved relative to the scene file's folder.
 /// A `.obj` file is read as a mesh and framed by [`Scene::for_mesh`].
+///
+/// Files are read with bounds (see [`crate::limits`]): devices and folders
+/// are refused, and a file larger than the memory available allows is
+/// refused before it is read.
 pub fn load_scene(path: &Path) -> Result<Scene, ParseError> {
+    load_scene_files(path).map(|(scene, _)| scene)
+}
+
+/// [`load_scene`], and every file it read: the scene file first, then the
+/// meshes it names (so a render can refuse to overwrite any of them).
+pub fn load_scene_files(path: &Path) -> Result<(Scene, Vec<PathBuf>), ParseError> {
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
     {
-        return Ok(Scene::for_mesh(obj::load_obj(path)?));
+        return Ok((Scene::for_mesh(obj::load_obj(path)?), vec![path.into()]));
     }
-    let bytes = std::fs::read(path)
+    let bytes = input::read_input(path)
         .map_err(|e| ParseError::unreadable(path, &e, "a readable scene file"))?;
     let src = diagnostic::decode(&bytes, path)?;
-    parse_scene(src, path)
+    let (scene, mut files) = mit6837::parse_with_meshes(src, path)?;
+    files.insert(0, path.into());
+    Ok((scene, files))
+}
+
+/// The BOM-skipping UTF-8 decoding `load_scene` applies, for the parser's tests.
+#[cfg(test)]
+pub(crate) fn diagnostic_decode_for_tests(bytes: &[u8]) -> &str {
+    diagnostic::decode(bytes, Path::new("t.txt")).expect("UTF-8")
 }
 
 /// Parses scene text; `file` is used in messages and to resolve `obj_file`

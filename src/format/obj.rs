@@ -7,6 +7,7 @@
 //! at the line it was reading when it stopped.
 
 use super::diagnostic::{decode, quote, ParseError};
+use crate::limits::{MAX_FACE_CORNERS, MAX_OBJ_LINE_BYTES};
 use crate::math::Vec3;
 use crate::scene::Mesh;
 use std::io;
@@ -37,7 +38,7 @@ pub(crate) enum LoadError {
 
 /// Reads and parses an OBJ file.
 pub(crate) fn load(path: &Path) -> Result<Mesh, LoadError> {
-    let bytes = std::fs::read(path).map_err(LoadError::Io)?;
+    let bytes = super::input::read_input(path).map_err(LoadError::Io)?;
     parse_obj(&bytes, path).map_err(LoadError::Parse)
 }
 
@@ -56,7 +57,8 @@ pub(crate) fn parse_obj(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
             .join("\n");
         without_lines.as_bytes()
     } else {
-        bytes
+        // Not `bytes`: `text` has no byte-order mark.
+        text.as_bytes()
     };
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -85,6 +87,26 @@ pub(crate) fn parse_obj(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
         ParseError::at(path, text, line, 1, "a valid OBJ line", found)
     })?;
     let mut mesh = Mesh::default();
+    if models.iter().all(|m| m.mesh.indices.is_empty()) {
+        // Any text file is a valid OBJ without faces; a mesh that draws
+        // nothing is almost certainly the wrong file.
+        let vertices = text
+            .split('\n')
+            .filter(|l| first_word(l) == Some("v"))
+            .count();
+        let found = match vertices {
+            0 => "no vertices and no faces".to_owned(),
+            n => format!("{n} vertices but no faces"),
+        };
+        return Err(ParseError::at(
+            path,
+            text,
+            0,
+            0,
+            "an OBJ mesh with at least one face ('f' line)",
+            found,
+        ));
+    }
     for model in models {
         let m = model.mesh;
         let base = u32::try_from(mesh.positions.len())
@@ -117,6 +139,18 @@ struct Counts {
 fn check(text: &str, path: &Path) -> Result<(), ParseError> {
     let mut counts = Counts::default();
     for (i, line) in text.split('\n').enumerate() {
+        if line.len() > MAX_OBJ_LINE_BYTES {
+            // Checked before the line is split: one face line of 100 MB used
+            // to take gigabytes and abort the process.
+            return Err(ParseError::at(
+                path,
+                text,
+                i + 1,
+                1,
+                format!("a line of at most {MAX_OBJ_LINE_BYTES} bytes"),
+                format!("a line of {} bytes", line.len()),
+            ));
+        }
         let words = words(line);
         let Some(&(_, first)) = words.first() else {
             continue;
@@ -161,6 +195,14 @@ fn check(text: &str, path: &Path) -> Result<(), ParseError> {
                         col(1),
                         format!("vertex indices after '{first}'"),
                         found(1),
+                    ));
+                }
+                if let Some(&(c, _)) = words.get(MAX_FACE_CORNERS + 1) {
+                    let found = format!("a face with {} corners", words.len() - 1);
+                    return Err(at(
+                        c,
+                        format!("at most {MAX_FACE_CORNERS} corners in a face"),
+                        found,
                     ));
                 }
                 for (k, &(c, w)) in words.iter().enumerate().skip(1) {
@@ -345,6 +387,40 @@ mod tests {
                 proptest::prop_assert!(m.triangles.iter().flatten().all(|&i| (i as usize) < n));
             }
         }
+    }
+
+    #[test]
+    fn a_file_without_faces_is_an_error_naming_it() {
+        // Loaded silently as an empty mesh before issue 15.
+        for (src, found) in [
+            ("hello, world\n", "no vertices and no faces"),
+            ("v 0 0 0\nv 1 0 0\n", "2 vertices but no faces"),
+        ] {
+            let e = parse(src).unwrap_err();
+            let want = format!(
+                "m.obj: expected an OBJ mesh with at least one face ('f' line), found {found}"
+            );
+            assert_eq!(e.to_string(), want);
+        }
+    }
+
+    #[test]
+    fn long_lines_and_huge_faces_are_refused_before_splitting() {
+        let mut src = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nf");
+        src.push_str(&" 1".repeat(MAX_FACE_CORNERS + 1));
+        let e = parse(&src).unwrap_err();
+        assert_eq!((e.line, e.col), (4, 2 * MAX_FACE_CORNERS + 3));
+        assert!(e.expected.contains("at most 65536 corners"), "{e}");
+        src.push_str(&" 1".repeat(MAX_OBJ_LINE_BYTES / 2));
+        let e = parse(&src).unwrap_err();
+        assert_eq!((e.line, e.col), (4, 1));
+        assert!(e.render().len() < 1000);
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_accepted() {
+        let m = parse("\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        assert_eq!(m.triangles.len(), 1);
     }
 
     #[test]

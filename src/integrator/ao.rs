@@ -5,7 +5,7 @@
 
 use super::{Integrator, RayKind, RayObserver};
 use crate::light::area::concentric_disk;
-use crate::math::{offset_origin, Ray, Vec2, Vec3};
+use crate::math::{Ray, SurfacePoint, Vec2, Vec3};
 use crate::render::SampleStream;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
@@ -38,13 +38,14 @@ pub fn cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
     (t1 * d.x + t2 * d.y + n * z).normalize_or(n)
 }
 
-/// Fraction of `ao.samples` cosine-weighted rays from `p` (unit normal `n`
-/// facing the side to test) that meet nothing within `ao.distance`: the
+/// Fraction of `ao.samples` cosine-weighted rays from the surface point
+/// `from` (unit normal `n` facing the side to test), spawned clear of its
+/// error bound at instant `time`, that meet nothing within `ao.distance`: the
 /// estimate of `(1/π) ∫ V(ω) cos θ dω`, which is 1 on an open plane.
 #[allow(clippy::too_many_arguments)]
 pub fn unoccluded(
     world: &World,
-    p: Vec3,
+    from: &SurfacePoint,
     n: Vec3,
     time: f32,
     ao: &AoSettings,
@@ -57,7 +58,7 @@ pub fn unoccluded(
     let mut open = 0u32;
     for u in stream.split_2d(k) {
         let w = cosine_hemisphere(n, u);
-        let ray = Ray::new(offset_origin(p, n, w), w).at_time(time);
+        let ray = from.spawn_ray(w).at_time(time);
         c.occlusion += 1;
         let blocked = world.occluded(&ray, 0.0, ao.distance, c);
         obs.ray(
@@ -112,7 +113,7 @@ impl Integrator for AmbientOcclusion {
         };
         let f = unoccluded(
             world,
-            h.point,
+            &h.surface_point(),
             n,
             ray.time,
             &self.settings,

@@ -16,8 +16,9 @@ use super::{RayKind, RayObserver};
 use crate::light::{incident, is_delta, sample_light};
 use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
-use crate::math::{offset_origin, Ray, Vec2, Vec3};
+use crate::math::{Ray, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
 use crate::render::{SampleStream, Sampler};
+use crate::scene::Light;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 
@@ -146,21 +147,18 @@ impl Whitted {
         // The shading normal faces the side the ray came from.
         let n = if back { -hit.normal } else { hit.normal };
         let p = hit.point;
-        let m = eval(
-            &world.materials,
-            hit.material,
-            self.texture_point(world, hit),
-        );
+        let m = self.material_at(world, hit);
 
         let mut color = world.background.ambient * m.diffuse;
         if let Some(ao) = &self.ambient_occlusion {
             if color != Vec3::ZERO {
-                color *= unoccluded(world, p, n, ray.time, ao, depth, stream, c, obs);
+                let from = hit.surface_point();
+                color *= unoccluded(world, &from, n, ray.time, ao, depth, stream, c, obs);
             }
         }
         for light in &world.lights {
             if !is_delta(light) {
-                color += self.area_light(world, ray, light, &m, p, n, d, depth, stream, c, obs);
+                color += self.area_light(world, ray, hit, light, &m, n, d, depth, stream, c, obs);
                 continue;
             }
             let inc = incident(light, p);
@@ -171,9 +169,12 @@ impl Whitted {
             // A light exactly at the point (zero direction) has nothing in
             // between, and a zero-direction shadow ray would be meaningless.
             if self.shadows && inc.to_light != Vec3::ZERO {
-                let shadow = ray.child(offset_origin(p, n, inc.to_light), inc.to_light);
-                color +=
-                    reflected * self.light_through(world, &shadow, inc.distance, depth, c, obs);
+                let target = match light {
+                    Light::Point { position, .. } => ShadowTarget::Point(*position),
+                    _ => ShadowTarget::Direction(inc.to_light),
+                };
+                let from = hit.surface_point();
+                color += reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
             } else {
                 color += reflected;
             }
@@ -188,8 +189,7 @@ impl Whitted {
             let rc = self.spread(
                 world,
                 ray,
-                p,
-                n,
+                &hit.surface_point(),
                 r,
                 n,
                 m.glossiness,
@@ -210,8 +210,7 @@ impl Whitted {
                 let tc = self.spread(
                     world,
                     ray,
-                    p,
-                    n,
+                    &hit.surface_point(),
                     t,
                     -n,
                     m.glossiness,
@@ -228,16 +227,17 @@ impl Whitted {
         color
     }
 
-    /// Colour arriving along the child direction `axis` from `p`: one ray for
-    /// a mirror or clear glass (`glossiness` 0), else the mean of rays over
-    /// the glossy lobe around `axis` on the `side` of the surface.
+    /// Colour arriving along the child direction `axis` from the surface
+    /// point `from`: one ray for a mirror or clear glass (`glossiness` 0),
+    /// else the mean of rays over the glossy lobe around `axis` on the `side`
+    /// of the surface. Child rays are spawned clear of `from`'s error bound
+    /// and keep `ray`'s time.
     #[allow(clippy::too_many_arguments)]
     fn spread(
         &self,
         world: &World,
         ray: &Ray,
-        p: Vec3,
-        n: Vec3,
+        from: &SurfacePoint,
         axis: Vec3,
         side: Vec3,
         glossiness: f32,
@@ -249,7 +249,7 @@ impl Whitted {
         obs: &mut impl RayObserver,
     ) -> Vec3 {
         if glossiness <= 0.0 {
-            let child = ray.child(offset_origin(p, n, axis), axis);
+            let child = from.spawn_ray(axis).at_time(ray.time);
             return self
                 .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
                 .0;
@@ -263,7 +263,7 @@ impl Whitted {
         let mut sum = Vec3::ZERO;
         for u in stream.split_2d(k) {
             let w = sample_lobe(axis, side, e, u);
-            let child = ray.child(offset_origin(p, n, w), w);
+            let child = from.spawn_ray(w).at_time(ray.time);
             c.glossy += 1;
             sum += self
                 .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
@@ -274,15 +274,17 @@ impl Whitted {
 
     /// Light from an area light: the mean over `shadow_samples` points of it,
     /// stratified by one split dimension of the stream, each with its own
-    /// shadow ray (the penumbra is the fraction of them blocked).
+    /// shadow ray (the penumbra is the fraction of them blocked), from the
+    /// hit to the sampled point with both ends offset out of their error
+    /// bounds.
     #[allow(clippy::too_many_arguments)]
     fn area_light(
         &self,
         world: &World,
         ray: &Ray,
-        light: &crate::scene::Light,
+        hit: &Hit,
+        light: &Light,
         m: &crate::scene::Phong,
-        p: Vec3,
         n: Vec3,
         d: Vec3,
         depth: u32,
@@ -291,6 +293,7 @@ impl Whitted {
         obs: &mut impl RayObserver,
     ) -> Vec3 {
         let k = self.shadow_samples.max(1);
+        let p = hit.point;
         let mut sum = Vec3::ZERO;
         for u in stream.split_2d(k) {
             let inc = sample_light(light, p, u);
@@ -298,9 +301,13 @@ impl Whitted {
             if reflected == Vec3::ZERO {
                 continue;
             }
-            if self.shadows {
-                let shadow = ray.child(offset_origin(p, n, inc.to_light), inc.to_light);
-                sum += reflected * self.light_through(world, &shadow, inc.distance, depth, c, obs);
+            if self.shadows && inc.to_light != Vec3::ZERO {
+                let target = match inc.at {
+                    Some(at) => ShadowTarget::Surface(at),
+                    None => ShadowTarget::Point(p + inc.to_light * inc.distance),
+                };
+                let from = hit.surface_point();
+                sum += reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
             } else {
                 sum += reflected;
             }
@@ -308,54 +315,90 @@ impl Whitted {
         sum / k as f32
     }
 
-    /// The point handed to the material: the world-space hit (the 6.837
-    /// scenes' texture matrices map world points) or, on request, the hit in
-    /// its object's space.
-    fn texture_point(&self, world: &World, hit: &Hit) -> Vec3 {
+    /// The Phong parameters at a hit. World-space lookups (the 6.837
+    /// scenes' texture matrices map world points) hand the rendering-space
+    /// hit to the world's materials, whose texture matrices have the move
+    /// back to world space folded in; object-space lookups hand the hit in
+    /// its object's space to the scene's own matrices.
+    fn material_at(&self, world: &World, hit: &Hit) -> crate::scene::Phong {
         match self.texture_space {
-            TextureSpace::World => hit.point,
-            TextureSpace::Object => {
-                world.object_from_world[hit.instance as usize].transform_point3(hit.point)
-            }
+            TextureSpace::World => eval(&world.materials, hit.material, hit.point),
+            TextureSpace::Object => eval(
+                &world.object_materials,
+                hit.material,
+                world.object_from_world[hit.instance as usize].transform_point3(hit.point),
+            ),
         }
     }
 
-    /// Fraction of a light's colour that reaches the end of `shadow` at
-    /// `distance`: 0 or 1 with opaque shadows; with transparent shadows the
-    /// product of the `transparentColor` of everything in between.
+    /// Fraction of a light's colour that reaches the surface point `from`
+    /// from `target` at instant `time`: 0 or 1 with opaque shadows; with
+    /// transparent shadows the product of the `transparentColor` of
+    /// everything in between.
+    #[allow(clippy::too_many_arguments)]
     fn light_through(
         &self,
         world: &World,
-        shadow: &Ray,
-        distance: f32,
+        from: SurfacePoint,
+        time: f32,
+        target: ShadowTarget,
         depth: u32,
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> Vec3 {
         c.shadow += 1;
         if !self.transparent_shadows {
-            let blocked = world.occluded(shadow, 0.0, distance, c);
-            obs.shadow(shadow, distance, blocked, depth);
+            let (shadow, tmax) = target.ray_from(&from, time);
+            let blocked = world.occluded(&shadow, 0.0, tmax, c);
+            obs.shadow(&shadow, tmax, blocked, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut filter = Vec3::ONE;
-        let mut ray = *shadow;
-        let mut left = distance;
-        // Each pass steps past one occluder; the cap guards against a ray
-        // trapped between coincident surfaces.
+        let mut from = from;
+        // Each pass steps past one occluder, spawning the next segment from
+        // its hit; the cap guards against a ray trapped between coincident
+        // surfaces.
         for _ in 0..64 {
-            let Some(h) = world.intersect(&ray, 0.0, left, c) else {
-                obs.ray(RayKind::Shadow, &ray, left, depth, 0.0, None);
+            let (ray, tmax) = target.ray_from(&from, time);
+            let Some(h) = world.intersect(&ray, 0.0, tmax, c) else {
+                obs.ray(RayKind::Shadow, &ray, tmax, depth, 0.0, None);
                 return filter;
             };
             obs.ray(RayKind::Shadow, &ray, h.t, depth, 0.0, Some(h.normal));
-            filter *= eval(&world.materials, h.material, self.texture_point(world, &h)).transparent;
+            filter *= self.material_at(world, &h).transparent;
             if filter == Vec3::ZERO {
                 return filter;
             }
-            left -= h.t;
-            ray = ray.child(offset_origin(h.point, h.normal, ray.dir), ray.dir);
+            from = h.surface_point();
         }
         Vec3::ZERO
+    }
+}
+
+/// Where a shadow ray goes.
+#[derive(Clone, Copy, Debug)]
+enum ShadowTarget {
+    /// A point light at this (rendering-space) position.
+    Point(Vec3),
+    /// Infinitely far along this unit direction.
+    Direction(Vec3),
+    /// A sampled point of an area light's surface, with its error bound.
+    Surface(SurfacePoint),
+}
+
+impl ShadowTarget {
+    /// The shadow ray from `from` and the `tmax` it is traced to: a point
+    /// light's ray ends at the light (`t = 1`), kept `SHADOW_EPSILON` short
+    /// of it so a surface the light sits on does not shadow it; an area
+    /// light's sample likewise, with its own end offset out of its error
+    /// bound too. The ray travels at instant `time` (motion blur: shadows
+    /// of moving objects are cast where they are at that instant).
+    fn ray_from(self, from: &SurfacePoint, time: f32) -> (Ray, f32) {
+        let (ray, tmax) = match self {
+            ShadowTarget::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),
+            ShadowTarget::Direction(d) => (from.spawn_ray(d), f32::INFINITY),
+            ShadowTarget::Surface(s) => (from.spawn_ray_to_surface(&s), 1.0 - SHADOW_EPSILON),
+        };
+        (ray.at_time(time), tmax)
     }
 }

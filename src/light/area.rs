@@ -4,7 +4,7 @@
 //! whole contribution.
 
 use super::Incident;
-use crate::math::{Vec2, Vec3};
+use crate::math::{gamma, SurfacePoint, Vec2, Vec3};
 use crate::scene::AreaShape;
 use std::f32::consts::{PI, TAU};
 
@@ -44,8 +44,12 @@ pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
         } => {
             let n = edge1.cross(edge2);
             let area = n.length();
-            let y = corner + u.x * edge1 + u.y * edge2;
-            from_area_point(p, y, n / area.max(f32::MIN_POSITIVE), area, radiance)
+            let (a, b) = (u.x * edge1, u.y * edge2);
+            let y = corner + a + b;
+            // Two products and two sums per coordinate.
+            let error = gamma(4) * (corner.abs() + a.abs() + b.abs());
+            let n = n / area.max(f32::MIN_POSITIVE);
+            from_area_point(p, SurfacePoint { p: y, error, n }, area, radiance)
         }
         AreaShape::Disk {
             center,
@@ -55,14 +59,19 @@ pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
             let n = normal.normalize_or_zero();
             let (t1, t2) = n.any_orthonormal_pair();
             let d = concentric_disk(u) * radius;
-            let y = center + d.x * t1 + d.y * t2;
-            from_area_point(p, y, n, PI * radius * radius, radiance)
+            let (a, b) = (d.x * t1, d.y * t2);
+            let y = center + a + b;
+            // Off the disk's plane only by the rounding of the in-plane
+            // offsets (`t1`, `t2` are unit within a few ulps) and the sums.
+            let error = gamma(6) * (center.abs() + a.abs() + b.abs());
+            from_area_point(p, SurfacePoint { p: y, error, n }, PI * radius * radius, radiance)
         }
         AreaShape::Sphere { center, radius } => sample_sphere(center, radius, radiance, p, u),
     }
 }
 
-fn from_area_point(p: Vec3, y: Vec3, n: Vec3, area: f32, radiance: Vec3) -> Incident {
+fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Incident {
+    let (y, n) = (at.p, at.n);
     let d = y - p;
     let dist2 = d.length_squared();
     if dist2 == 0.0 || !dist2.is_finite() {
@@ -76,6 +85,7 @@ fn from_area_point(p: Vec3, y: Vec3, n: Vec3, area: f32, radiance: Vec3) -> Inci
         to_light: w,
         color: radiance * (cos_l * area / dist2),
         distance: dist * SHORT,
+        at: Some(at),
     }
 }
 
@@ -100,10 +110,17 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     let disc = (r * r - (d2 - b * b)).max(0.0);
     let t = b - disc.sqrt();
     let solid_angle = TAU * (1.0 - cos_max);
+    // The point re-projected onto the sphere, with pbrt's bound for a point
+    // so computed.
+    let y = p + w * t;
+    let n = (y - c).normalize_or_zero();
+    let y = c + r * n;
+    let error = gamma(5) * y.abs();
     Incident {
         to_light: w,
         color: radiance * solid_angle,
         distance: t * SHORT,
+        at: Some(SurfacePoint { p: y, error, n }),
     }
 }
 

@@ -5,7 +5,7 @@
 
 pub mod area;
 
-use crate::math::{Vec2, Vec3};
+use crate::math::{SurfacePoint, Vec2, Vec3};
 use crate::scene::Light;
 
 /// Light arriving at a point from one light.
@@ -18,6 +18,11 @@ pub struct Incident {
     /// Distance to the light (infinite for directional lights); shadow rays
     /// stop there.
     pub distance: f32,
+    /// The chosen point of an area light's surface, with a bound on its
+    /// floating-point error and the light's normal there: shadow rays go to
+    /// it with both ends offset ([`SurfacePoint::spawn_ray_to_surface`]).
+    /// `None` for point and directional lights.
+    pub at: Option<SurfacePoint>,
 }
 
 impl Incident {
@@ -26,6 +31,7 @@ impl Incident {
         to_light: Vec3::ZERO,
         color: Vec3::ZERO,
         distance: 0.0,
+        at: None,
     };
 }
 
@@ -61,6 +67,7 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
             to_light: -direction.as_dvec3().normalize_or_zero().as_vec3(),
             color: *color,
             distance: f32::INFINITY,
+            at: None,
         },
         Light::Point {
             position,
@@ -73,6 +80,7 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
                 to_light: d.normalize_or_zero().as_vec3(),
                 color: *color * attenuation_factor(*attenuation, dist as f32),
                 distance: dist as f32,
+                at: None,
             }
         }
     }
@@ -83,7 +91,9 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
 pub fn attenuation_factor(k: Vec3, d: f32) -> f32 {
     let denom = k.x + k.y * d + k.z * d * d;
     if denom > 0.0 && denom.is_finite() {
-        1.0 / denom
+        // Capped: `attenuation 0 0 1e-30` (or a point right at the light)
+        // would otherwise make the light infinitely bright.
+        (1.0 / denom).min(crate::limits::MAX_ATTENUATION_GAIN)
     } else {
         1.0
     }

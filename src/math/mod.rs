@@ -1,11 +1,14 @@
-//! Vectors and matrices (re-exported from glam), rays, boxes and the
-//! self-intersection offset shared by every shape.
+//! Vectors and matrices (re-exported from glam), rays, boxes, and the
+//! floating-point error bounds and ray spawning that keep secondary rays off
+//! the surface they leave (see `docs/numerics.md`).
 
 mod aabb;
+pub mod float;
 mod motion;
 mod ray;
 
 pub use aabb::Aabb;
+pub use float::gamma;
 pub use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 pub use motion::{Keyframe, Motion, SWEEP_STEPS};
-pub use ray::{offset_origin, Ray};
+pub use ray::{Ray, SurfacePoint, SHADOW_EPSILON};

@@ -1,3 +1,4 @@
+use super::float::offset_ray_origin;
 use glam::Vec3;
 
 /// A ray `origin + t * dir` at an instant `time`. `dir` is not necessarily
@@ -53,22 +54,59 @@ impl Ray {
     }
 }
 
-/// Moves a surface point off the surface along the geometric normal, to the side
-/// the new ray leaves towards, so the new ray cannot re-hit the surface it starts on.
-///
-/// Why a scaled offset and not a fixed epsilon: f32 hit points carry an error
-/// proportional to their magnitude (and to the magnitude of the ray's origin and
-/// `t` that produced them), so a fixed epsilon is too small far from the origin
-/// and too large near it. The constant covers the few ulps of error the
-/// intersection routines accumulate (see the acne test in `tests/`).
-#[inline]
-pub fn offset_origin(p: Vec3, n: Vec3, dir: Vec3) -> Vec3 {
-    let scale = p.abs().max_element().max(1.0);
-    let eps = 1e-4 * scale;
-    if n.dot(dir) >= 0.0 {
-        p + n * eps
-    } else {
-        p - n * eps
+/// How far short of its target a ray spawned *to* a point stops, as a
+/// fraction of the way (pbrt's `ShadowEpsilon`): a shadow ray towards a
+/// light ends at `t = 1 − SHADOW_EPSILON`, so a surface the light lies on
+/// (within rounding) does not shadow it.
+pub const SHADOW_EPSILON: f32 = 1e-4;
+
+/// A point on a surface as an intersection computed it: the point, a
+/// conservative per-axis bound on its floating-point error (the true surface
+/// point lies within `p ± error`), and the unit geometric normal there.
+/// Secondary rays leave from it through [`SurfacePoint::spawn_ray`] and
+/// friends, never from `p` itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    /// The computed point.
+    pub p: Vec3,
+    /// Per-axis bound on `|p − true point|`.
+    pub error: Vec3,
+    /// Unit geometric normal (either orientation: only its line matters here).
+    pub n: Vec3,
+}
+
+impl SurfacePoint {
+    /// The origin of a ray leaving towards `w`: `p` pushed out of its error
+    /// box along the normal, on `w`'s side ([`offset_ray_origin`]).
+    #[inline]
+    pub fn offset_origin(&self, w: Vec3) -> Vec3 {
+        offset_ray_origin(self.p, self.error, self.n, w)
+    }
+
+    /// A ray leaving the surface in direction `dir`, to be traced with any
+    /// `t > 0`: it cannot re-hit the surface at its start.
+    #[inline]
+    pub fn spawn_ray(&self, dir: Vec3) -> Ray {
+        Ray::new(self.offset_origin(dir), dir)
+    }
+
+    /// A ray from the surface to the point `target` (a point light): `t = 1`
+    /// is the target; trace it over `(0, 1 − SHADOW_EPSILON)`.
+    #[inline]
+    pub fn spawn_ray_to(&self, target: Vec3) -> Ray {
+        let origin = self.offset_origin(target - self.p);
+        Ray::new(origin, target - origin)
+    }
+
+    /// A ray between two surface points (an area light's sample, a
+    /// visibility test): both ends are offset out of their error boxes, each
+    /// towards the other, so neither surface is hit at its end. `t = 1` is
+    /// the far end; trace it over `(0, 1 − SHADOW_EPSILON)`.
+    #[inline]
+    pub fn spawn_ray_to_surface(&self, to: &SurfacePoint) -> Ray {
+        let end = to.offset_origin(self.p - to.p);
+        let origin = self.offset_origin(end - self.p);
+        Ray::new(origin, end - origin)
     }
 }
 
@@ -76,19 +114,40 @@ pub fn offset_origin(p: Vec3, n: Vec3, dir: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn offset_goes_to_the_side_of_the_new_direction() {
-        let p = Vec3::new(0.0, 0.0, 0.0);
-        let n = Vec3::Y;
-        assert!(offset_origin(p, n, Vec3::new(0.3, 1.0, 0.0)).y > 0.0);
-        assert!(offset_origin(p, n, Vec3::new(0.3, -1.0, 0.0)).y < 0.0);
+    fn on_floor(p: Vec3, err: f32) -> SurfacePoint {
+        SurfacePoint {
+            p,
+            error: Vec3::splat(err),
+            n: Vec3::Y,
+        }
     }
 
     #[test]
-    fn offset_scales_with_magnitude() {
-        let n = Vec3::Y;
-        let near = offset_origin(Vec3::ZERO, n, n).y;
-        let far = offset_origin(Vec3::splat(1e4), n, n).y - 1e4;
-        assert!(far > near * 100.0);
+    fn spawned_rays_start_on_the_side_they_leave_towards() {
+        let s = on_floor(Vec3::ZERO, 1e-6);
+        assert!(s.spawn_ray(Vec3::new(0.3, 1.0, 0.0)).origin.y > 0.0);
+        assert!(s.spawn_ray(Vec3::new(0.3, -1.0, 0.0)).origin.y < 0.0);
+    }
+
+    #[test]
+    fn a_ray_to_a_point_ends_there_at_t_one() {
+        let s = on_floor(Vec3::new(1.0, 0.0, 2.0), 1e-6);
+        let light = Vec3::new(-3.0, 5.0, 0.5);
+        let r = s.spawn_ray_to(light);
+        assert!((r.at(1.0) - light).length() < 1e-6);
+        assert!(r.origin.y > 0.0);
+    }
+
+    #[test]
+    fn a_ray_between_surfaces_leaves_both_error_boxes() {
+        let a = on_floor(Vec3::new(0.0, 0.0, 0.0), 1e-3);
+        let b = SurfacePoint {
+            p: Vec3::new(0.0, 4.0, 0.0),
+            error: Vec3::splat(1e-3),
+            n: Vec3::NEG_Y,
+        };
+        let r = a.spawn_ray_to_surface(&b);
+        assert!(r.origin.y >= 1e-3);
+        assert!(r.at(1.0).y <= 4.0 - 1e-3);
     }
 }

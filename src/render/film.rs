@@ -48,6 +48,11 @@ impl Rect {
         (self.x0..self.x1).contains(&x) && (self.row0..self.row1).contains(&row)
     }
 
+    /// Whether the two share a pixel.
+    pub fn overlaps(&self, o: &Rect) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.row0 < o.row1 && o.row0 < self.row1
+    }
+
     /// Grown by `m` pixels on every side, clipped to a `w`×`h` image.
     pub fn grown(&self, m: u32, w: u32, h: u32) -> Rect {
         Rect {

@@ -23,7 +23,8 @@ use crate::integrator::{Integrator, NoObserver, Whitted};
 use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
 use crate::world::World;
-use film::{merge, tiles, Rect, TileFilm};
+pub use film::Rect;
+use film::{merge, tiles, TileFilm};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -163,12 +164,51 @@ pub fn render_image<I: Integrator>(
     if settings.filter.support() == 0 {
         return render_bands(world, camera, integrator, settings, control);
     }
+    render_tiles(world, camera, integrator, settings, control, None)
+}
+
+/// Renders only what the pixels of `region` need: every tile whose film
+/// (the tile grown by the filter's support) reaches into `region`. Inside
+/// `region` the frame is bit for bit the frame [`render_image`] makes,
+/// because each pixel is reconstructed from the same tile films, each a pure
+/// function of the settings and the tile, summed in the same order; outside
+/// it the frame is incomplete. This is what makes a frame's pieces, rendered
+/// on different machines, merge exactly. It always takes the tiled path, which
+/// gives the band loop's pixels bit for bit. Adaptive sampling is not supported
+/// (its corner rays are shared across tiles): the region is then ignored.
+pub fn render_region<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    settings: &Settings,
+    control: Control,
+    region: Rect,
+) -> Rendered {
+    if let Some(a) = settings.adaptive {
+        return adaptive::render(world, camera, integrator, settings, &a, control);
+    }
+    render_tiles(world, camera, integrator, settings, control, Some(region))
+}
+
+/// The tile loop of [`render_image`] and [`render_region`].
+fn render_tiles<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    settings: &Settings,
+    control: Control,
+    region: Option<Rect>,
+) -> Rendered {
     let (w, h) = settings.size;
     let rects = tiles(w, h, settings.tile_size);
+    let support = settings.filter.support();
     let done: Vec<Option<(TileFilm, Counters, Vec<SampleRecord>)>> = rects
         .par_iter()
         .map(|&rect| {
             if control.cancelled() {
+                return None;
+            }
+            if region.is_some_and(|r| !rect.grown(support, w, h).overlaps(&r)) {
                 return None;
             }
             let out = render_tile(world, camera, integrator, settings, rect);

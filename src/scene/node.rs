@@ -89,7 +89,7 @@ impl Node {
                 )
                 .transformed(m),
                 Shape::Plane { normal, offset } => crate::shape::Plane::new(*normal, *offset)
-                    .and_then(|p| p.transformed(m))
+                    .and_then(|p| p.transformed(&m.as_dmat4()))
                     .map_or(Aabb::EMPTY, |p| p.bounds()),
                 Shape::Triangle(v) => Aabb::from_points(v.iter().map(|&p| m.transform_point3(p))),
                 Shape::Mesh(mesh) => {

@@ -1,8 +1,10 @@
-//! Shapes in world space: intersection (`t` only, the hot path), the normal at a
-//! hit (computed once, for the closest hit), and bounds.
+//! Shapes in world space: intersection (`t` only, the hot path), the surface
+//! point at a hit with its floating-point error bound and normal (computed
+//! once, for the closest hit), and bounds.
 //!
-//! A ray hits a shape at `t` only when `tmin < t < tmax`, strictly: a ray that
-//! starts on a surface (after the origin offset) cannot re-hit it at `t = tmin`.
+//! A ray hits a shape at `t` only when `tmin < t < tmax`, strictly. Secondary
+//! rays start outside the error box of the point they leave
+//! ([`crate::math::SurfacePoint`]), so they cannot re-hit its surface there.
 
 mod moving;
 mod plane;
@@ -14,9 +16,9 @@ pub use moving::Moving;
 pub use plane::Plane;
 pub use sphere::Sphere;
 pub use transformed::Transformed;
-pub use triangle::Triangle;
+pub use triangle::{intersect_triangle, Triangle, TriangleHit, WatertightRay};
 
-use crate::math::{Aabb, Ray, Vec3};
+use crate::math::{Aabb, Ray, SurfacePoint};
 
 /// One intersectable shape of the world.
 #[derive(Clone, Debug)]
@@ -48,16 +50,17 @@ impl Shape {
         }
     }
 
-    /// Unit geometric normal at the point `p` of this shape's surface (outward
-    /// for spheres, counter-clockwise front for triangles), at instant `time`
-    /// (only moving shapes look at it).
-    pub fn normal(&self, p: Vec3, time: f32) -> Vec3 {
+    /// The hit at parameter `t` of `ray` (a `t` this shape reported): the
+    /// point, a conservative bound on its floating-point error, and the unit
+    /// geometric normal (outward for spheres, counter-clockwise front for
+    /// triangles). Computed once, for the closest hit.
+    pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
         match self {
-            Shape::Sphere(s) => s.normal(p),
-            Shape::Plane(pl) => pl.normal,
-            Shape::Triangle(t) => t.normal,
-            Shape::Transformed(x) => x.normal(p, time),
-            Shape::Moving(m) => m.normal(p, time),
+            Shape::Sphere(s) => s.surface(ray, t),
+            Shape::Plane(pl) => pl.surface(ray, t),
+            Shape::Triangle(tr) => tr.surface(ray, t),
+            Shape::Transformed(x) => x.surface(ray, t),
+            Shape::Moving(m) => m.surface(ray, t),
         }
     }
 

@@ -1,4 +1,5 @@
-use crate::math::{Aabb, Mat4, Ray, Vec3};
+use crate::math::{gamma, Aabb, Ray, SurfacePoint, Vec3};
+use glam::DMat4;
 
 /// The plane `normal · p = offset`, stored with a unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,18 +22,29 @@ impl Plane {
     }
 
     /// The plane carried through an invertible affine matrix: the normal by the
-    /// inverse transpose, a point of the plane by the matrix itself.
-    pub fn transformed(&self, m: &Mat4) -> Option<Self> {
-        let p = m.transform_point3(self.normal * self.offset);
-        let n = m.inverse().transpose().transform_vector3(self.normal);
+    /// inverse transpose, a point of the plane by the matrix itself. In f64,
+    /// so a plane moved far away and back (the rendering space) keeps its
+    /// offset to f32 precision.
+    pub fn transformed(&self, m: &DMat4) -> Option<Self> {
+        let p = m.transform_point3(self.normal.as_dvec3() * self.offset as f64);
+        let n = m
+            .inverse()
+            .transpose()
+            .transform_vector3(self.normal.as_dvec3());
         let len = n.length();
-        (len > 0.0 && len.is_finite()).then(|| {
-            let n = n / len;
-            Self {
-                normal: n,
-                offset: n.dot(p),
-            }
-        })
+        let n = n / len;
+        let plane = Self {
+            normal: n.as_vec3(),
+            offset: n.dot(p) as f32,
+        };
+        (len > 0.0 && plane.normal.is_finite() && plane.offset.is_finite()).then_some(plane)
+    }
+
+    /// The hit at parameter `t` of `ray`: `ray.at(t)` projected onto the
+    /// plane (the projection removes the error `t` carries along the ray).
+    /// See `project_onto_plane` (below) for the error bound.
+    pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
+        project_onto_plane(ray.at(t), self.normal, self.offset)
     }
 
     /// Hit parameter in `(tmin, tmax)`; rays parallel to the plane miss.
@@ -62,6 +74,27 @@ impl Plane {
             }
         }
         b
+    }
+}
+
+/// `p` projected onto the plane `n·x = d` (unit `n`), with its error bound.
+///
+/// The projection is `q = p − s·n` with `s = n·p − d`. Its error has two
+/// parts: the rounding of each coordinate of `q` (a product and a
+/// difference: `γ(2)·(|q| + |s·n|)`, taken as `γ(3)·(|q| + 2|s|·|n|)` for
+/// slack), and how far the exactly computed `p − s·n` can still be from the
+/// plane, along `n`: the error of `s` (a 3-term dot product and a
+/// difference: `γ(4)·(Σ|n_i·p_i| + |d|)`, taken as `γ(5)`) plus `|s|·|1 − n·n|`
+/// (`γ(3)·|s|` for an f32-normalised `n`, taken as `γ(4)`). The second part
+/// is spread over the axes as `δ·|n|`, so that `|n|·error ≥ δ`.
+pub fn project_onto_plane(p: Vec3, n: Vec3, d: f32) -> SurfacePoint {
+    let s = n.dot(p) - d;
+    let q = p - s * n;
+    let along = gamma(5) * (n.abs().dot(p.abs()) + d.abs()) + gamma(4) * s.abs();
+    SurfacePoint {
+        p: q,
+        error: gamma(3) * (q.abs() + 2.0 * s.abs() * n.abs()) + along * n.abs(),
+        n,
     }
 }
 
@@ -110,11 +143,26 @@ mod tests {
     #[test]
     fn transformed_plane() {
         let p = Plane::new(Vec3::Y, 1.0).unwrap();
-        let m = Mat4::from_translation(Vec3::new(0.0, 2.0, 0.0))
-            * Mat4::from_rotation_z(std::f32::consts::FRAC_PI_2);
+        let m = DMat4::from_translation(glam::DVec3::new(0.0, 2.0, 0.0))
+            * DMat4::from_rotation_z(std::f64::consts::FRAC_PI_2);
         let q = p.transformed(&m).unwrap();
         // y = 1 rotated by 90° about z becomes x = -1, then moved up (no effect on x).
         assert!((q.normal - Vec3::NEG_X).length() < 1e-6);
         assert!((q.offset - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn projected_hit_is_on_the_plane_within_its_error() {
+        let p = Plane::new(Vec3::new(0.3, 1.0, -0.2), 7.5e3).unwrap();
+        let r = Ray::new(Vec3::new(-4e4, 2e3, 1e4), Vec3::new(0.9, 0.05, -0.3));
+        let t = p.intersect(&r, 0.0, f32::INFINITY).unwrap();
+        let sp = p.surface(&r, t);
+        let n = p.normal.as_dvec3();
+        let dist = n.dot(sp.p.as_dvec3()) - p.offset as f64;
+        assert!(
+            dist.abs() <= sp.error.as_dvec3().dot(n.abs()),
+            "{dist} vs {}",
+            sp.error
+        );
     }
 }

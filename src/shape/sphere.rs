@@ -1,4 +1,4 @@
-use crate::math::{Aabb, Ray, Vec3};
+use crate::math::{gamma, Aabb, Ray, SurfacePoint, Vec3};
 
 /// A sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,9 +42,25 @@ impl Sphere {
         }
     }
 
-    /// Outward unit normal at `p`.
-    pub fn normal(&self, p: Vec3) -> Vec3 {
-        (p - self.center) / self.radius
+    /// The hit at parameter `t` of `ray` (pbrt's reprojection): the point is
+    /// computed relative to the centre and scaled back onto the sphere, which
+    /// removes the error `t` carries along the ray; what remains is the
+    /// rounding of that reprojection, `γ(5)·|p − c|` (pbrt-v3 §3.9.4), and of
+    /// adding the centre back, `γ(1)·|p|`.
+    pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
+        let rel = (ray.origin - self.center) + t * ray.dir;
+        let len = rel.length();
+        let rel = if len > 0.0 && len.is_finite() {
+            rel * (self.radius / len)
+        } else {
+            rel
+        };
+        let p = self.center + rel;
+        SurfacePoint {
+            p,
+            error: gamma(5) * rel.abs() + gamma(1) * p.abs(),
+            n: rel.normalize_or_zero(),
+        }
     }
 
     /// Bounding box.
@@ -72,7 +88,7 @@ mod tests {
         let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
         let t = unit().intersect(&r, 0.0, f32::INFINITY).unwrap();
         assert!((t - 4.0).abs() < 1e-6);
-        assert_eq!(unit().normal(r.at(t)), Vec3::NEG_Z);
+        assert_eq!(unit().surface(&r, t).n, Vec3::NEG_Z);
     }
 
     #[test]
@@ -125,5 +141,24 @@ mod tests {
         assert!(unit().intersect(&r, 0.0, 3.9).is_none());
         let t = unit().intersect(&r, 4.5, f32::INFINITY).unwrap();
         assert!((t - 6.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn surface_point_is_on_the_sphere_within_its_error() {
+        let s = Sphere {
+            center: Vec3::new(1e4, -2e3, 5e3),
+            radius: 3.0,
+        };
+        let r = Ray::new(
+            Vec3::new(0.0, 1.0, 0.0),
+            s.center - Vec3::new(0.0, 1.0, 0.0),
+        );
+        let t = s.intersect(&r, 0.0, f32::INFINITY).unwrap();
+        let sp = s.surface(&r, t);
+        // The exact distance from the centre, in f64, within the error box.
+        let d = (sp.p.as_dvec3() - s.center.as_dvec3()).length() - 3.0;
+        assert!(d.abs() <= sp.error.length() as f64, "{d} vs {}", sp.error);
+        assert!(sp.error.max_element() > 0.0);
+        assert!((sp.n.length() - 1.0).abs() < 1e-6);
     }
 }

@@ -1,15 +1,162 @@
-use crate::math::{Aabb, Ray, Vec3};
+//! Triangles and the watertight ray–triangle test (Woop, Benthin and Wald,
+//! "Watertight Ray/Triangle Intersection", JCGT 2013; as in pbrt-v4).
+//!
+//! Why watertight: Möller–Trumbore computes each triangle's barycentrics from
+//! its own edge vectors, so two triangles sharing an edge round differently
+//! and a ray through the edge can slip between them (a pixel-sized hole in a
+//! mesh). The watertight test moves the ray to the origin, permutes and
+//! shears space so the ray runs along +z, and decides inside/outside by the
+//! signs of three 2-D edge functions of the *transformed vertices*. A shared
+//! vertex transforms to the same value in both triangles, and the edge
+//! function of a shared edge is computed exactly (products of f32 values are
+//! exact in f64, and an f64 difference has the exact sign), with opposite
+//! signs from its two sides: a ray through an edge or a vertex hits at least
+//! one of the triangles that share it.
+//!
+//! [`intersect_triangle`] is a free function on three vertices and a
+//! [`WatertightRay`] (the per-ray permutation and shear), so an accelerator
+//! that stores vertices its own way calls the identical arithmetic.
 
-/// A triangle with its edges and unit normal precomputed (Möller–Trumbore
-/// needs the edges on every test; the normal is needed once per hit).
+use super::plane::project_onto_plane;
+use crate::math::{gamma, Aabb, Ray, SurfacePoint, Vec3};
+
+/// The per-ray data of the watertight test: the ray's origin, the axis
+/// permutation that makes the direction's largest component `z`, and the
+/// shear that maps the direction onto `+z`. Compute it once per ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WatertightRay {
+    origin: Vec3,
+    /// Permuted axes: `kz` is the direction's dominant axis.
+    k: [usize; 3],
+    /// Shear `(−d_x/d_z, −d_y/d_z, 1/d_z)` in permuted axes.
+    shear: Vec3,
+}
+
+impl WatertightRay {
+    /// The permutation and shear of `ray` (any non-zero direction).
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let a = ray.dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let kx = (kz + 1) % 3;
+        let ky = (kx + 1) % 3;
+        let d = ray.dir;
+        let sz = 1.0 / d[kz];
+        Self {
+            origin: ray.origin,
+            k: [kx, ky, kz],
+            shear: Vec3::new(-d[kx] * sz, -d[ky] * sz, sz),
+        }
+    }
+
+    /// Vertex `p` in ray space: relative to the origin, permuted and sheared
+    /// in x and y (z is scaled later, only if the edge test passes).
+    #[inline]
+    fn transform(&self, p: Vec3) -> Vec3 {
+        let q = p - self.origin;
+        let [kx, ky, kz] = self.k;
+        let z = q[kz];
+        Vec3::new(q[kx] + self.shear.x * z, q[ky] + self.shear.y * z, z)
+    }
+}
+
+/// A ray–triangle hit: the parameter and the barycentric weights of the three
+/// vertices (`point = b[0]·p0 + b[1]·p1 + b[2]·p2`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Barycentric coordinates, each in `[0, 1]`, summing to 1 up to rounding.
+    pub b: [f32; 3],
+}
+
+/// The watertight test of the ray behind `r` against triangle `(p0, p1, p2)`,
+/// either side, accepting `tmin < t < tmax`. When `tmin ≥ 0`, a hit whose `t`
+/// is not conservatively positive (within its own rounding error of 0, pbrt's
+/// `deltaT`) is rejected too: it cannot be told apart from the ray's origin.
+///
+/// A degenerate triangle (collinear vertices) may report a hit with
+/// meaningless barycentrics; callers skip degenerate triangles (see
+/// [`Triangle::is_degenerate`]), which is cheaper than re-checking per ray.
+#[inline]
+pub fn intersect_triangle(
+    r: &WatertightRay,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    tmin: f32,
+    tmax: f32,
+) -> Option<TriangleHit> {
+    let (a, b, c) = (r.transform(p0), r.transform(p1), r.transform(p2));
+    // Edge functions in f64: each product of two f32 values is exact there,
+    // so every sign is exact and a shared edge gets exactly opposite values
+    // from its two triangles (no fallback path needed for ties).
+    let edge = |p: Vec3, q: Vec3| p.x as f64 * q.y as f64 - p.y as f64 * q.x as f64;
+    let e0 = edge(b, c);
+    let e1 = edge(c, a);
+    let e2 = edge(a, b);
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None; // the ray lies in the triangle's plane
+    }
+    let sz = r.shear.z;
+    let (az, bz, cz) = (a.z * sz, b.z * sz, c.z * sz);
+    let t_scaled = e0 * az as f64 + e1 * bz as f64 + e2 * cz as f64;
+    let inv_det = 1.0 / det;
+    let t = (t_scaled * inv_det) as f32;
+    if !(t > tmin && t < tmax) {
+        return None;
+    }
+    if tmin >= 0.0 {
+        // pbrt-v4's bound on the error of t, from the errors of the
+        // transformed coordinates (conservative here: our edge functions
+        // are more accurate than the f32 ones it assumes). One change: the
+        // x and y errors use the *unscaled* z (the shear adds `s·z` with
+        // `|s| ≤ 1`), where pbrt uses z scaled by `1/d_z`; with the short
+        // directions of rays carried into a large transform's object space
+        // (`|d| ~ 1e-3`), pbrt's form overstates deltaT a thousandfold and
+        // rejects real hits.
+        let max_z = az.abs().max(bz.abs()).max(cz.abs());
+        let max_z_unscaled = a.z.abs().max(b.z.abs()).max(c.z.abs());
+        let max_x = a.x.abs().max(b.x.abs()).max(c.x.abs());
+        let max_y = a.y.abs().max(b.y.abs()).max(c.y.abs());
+        let delta_z = gamma(3) * max_z;
+        let delta_x = gamma(5) * (max_x + max_z_unscaled);
+        let delta_y = gamma(5) * (max_y + max_z_unscaled);
+        let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+        let max_e = e0.abs().max(e1.abs()).max(e2.abs()) as f32;
+        let delta_t = 3.0
+            * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e)
+            * (inv_det.abs() as f32);
+        if t <= delta_t {
+            return None;
+        }
+    }
+    Some(TriangleHit {
+        t,
+        b: [
+            (e0 * inv_det) as f32,
+            (e1 * inv_det) as f32,
+            (e2 * inv_det) as f32,
+        ],
+    })
+}
+
+/// A triangle: its three vertices as given (exactly, so that triangles
+/// sharing a vertex share its bits) and its unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Triangle {
-    /// First vertex.
-    pub v0: Vec3,
-    /// `v1 - v0`.
-    pub e1: Vec3,
-    /// `v2 - v0`.
-    pub e2: Vec3,
+    /// The vertices, counter-clockwise seen from the front.
+    pub v: [Vec3; 3],
     /// Unit normal of the counter-clockwise front; zero for a degenerate triangle.
     pub normal: Vec3,
 }
@@ -17,43 +164,68 @@ pub struct Triangle {
 impl Triangle {
     /// A triangle from its vertices.
     pub fn new(v0: Vec3, v1: Vec3, v2: Vec3) -> Self {
-        let e1 = v1 - v0;
-        let e2 = v2 - v0;
+        // The normal in f64: an f32 cross product of tiny or huge edges
+        // underflows or overflows before it is normalised.
+        let (a, b, c) = (v0.as_dvec3(), v1.as_dvec3(), v2.as_dvec3());
+        let n = (b - a).cross(c - a).normalize_or_zero().as_vec3();
         Self {
-            v0,
-            e1,
-            e2,
-            normal: e1.cross(e2).normalize_or_zero(),
+            v: [v0, v1, v2],
+            normal: if n.is_finite() { n } else { Vec3::ZERO },
         }
     }
 
     /// The three vertices.
     pub fn vertices(&self) -> [Vec3; 3] {
-        [self.v0, self.v0 + self.e1, self.v0 + self.e2]
+        self.v
     }
 
-    /// Möller–Trumbore. Degenerate triangles (zero normal) never report a hit,
-    /// so no NaN normal can reach shading.
+    /// Whether the vertices are collinear (no area, no normal): such a
+    /// triangle is never hit.
+    #[inline]
+    pub fn is_degenerate(&self) -> bool {
+        self.normal == Vec3::ZERO
+    }
+
+    /// The watertight test ([`intersect_triangle`]), with the barycentrics.
+    #[inline]
+    pub fn hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<TriangleHit> {
+        if self.is_degenerate() {
+            return None;
+        }
+        let [p0, p1, p2] = self.v;
+        intersect_triangle(&WatertightRay::new(ray), p0, p1, p2, tmin, tmax)
+    }
+
+    /// Hit parameter in `(tmin, tmax)`; degenerate triangles never report a
+    /// hit, so no NaN normal can reach shading.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<f32> {
-        let p = ray.dir.cross(self.e2);
-        let det = self.e1.dot(p);
-        if det == 0.0 || !det.is_finite() || self.normal == Vec3::ZERO {
-            return None;
+        self.hit(ray, tmin, tmax).map(|h| h.t)
+    }
+
+    /// The hit at parameter `t` of `ray`, from barycentric interpolation
+    /// (pbrt-v4): `p = Σ b_i·p_i` lies in the triangle's plane up to the
+    /// rounding of three products and two sums and of the barycentrics
+    /// themselves, bounded by `γ(7)·Σ|b_i·p_i|`. The barycentrics come from
+    /// re-running the identical test (it is deterministic), once per closest
+    /// hit rather than for every candidate.
+    pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
+        let [p0, p1, p2] = self.v;
+        match self.hit(ray, f32::NEG_INFINITY, f32::INFINITY) {
+            Some(TriangleHit {
+                b: [b0, b1, b2], ..
+            }) => {
+                let (q0, q1, q2) = (b0 * p0, b1 * p1, b2 * p2);
+                SurfacePoint {
+                    p: q0 + q1 + q2,
+                    error: gamma(7) * (q0.abs() + q1.abs() + q2.abs()),
+                    n: self.normal,
+                }
+            }
+            // Unreachable for a `t` this triangle reported; the projection
+            // onto its plane is the safe answer anyway.
+            None => project_onto_plane(ray.at(t), self.normal, self.normal.dot(p0)),
         }
-        let inv = 1.0 / det;
-        let s = ray.origin - self.v0;
-        let u = s.dot(p) * inv;
-        if !(0.0..=1.0).contains(&u) {
-            return None;
-        }
-        let q = s.cross(self.e1);
-        let v = ray.dir.dot(q) * inv;
-        if v < 0.0 || u + v > 1.0 {
-            return None;
-        }
-        let t = self.e2.dot(q) * inv;
-        (t > tmin && t < tmax).then_some(t)
     }
 
     /// Bounding box of the three vertices.
@@ -73,7 +245,10 @@ mod tests {
     #[test]
     fn hit_inside() {
         let r = Ray::new(Vec3::new(0.25, 0.25, 1.0), Vec3::NEG_Z);
-        assert!((tri().intersect(&r, 0.0, f32::INFINITY).unwrap() - 1.0).abs() < 1e-6);
+        let h = tri().hit(&r, 0.0, f32::INFINITY).unwrap();
+        assert!((h.t - 1.0).abs() < 1e-6);
+        assert!((h.b[0] - 0.5).abs() < 1e-6 && (h.b[1] - 0.25).abs() < 1e-6);
+        assert!((h.b.iter().sum::<f32>() - 1.0).abs() < 1e-6);
         assert_eq!(tri().normal, Vec3::Z);
     }
 
@@ -92,6 +267,13 @@ mod tests {
     }
 
     #[test]
+    fn negative_tmin_sees_behind() {
+        let r = Ray::new(Vec3::new(0.25, 0.25, 1.0), Vec3::Z);
+        let t = tri().intersect(&r, f32::NEG_INFINITY, f32::INFINITY);
+        assert!((t.unwrap() + 1.0).abs() < 1e-6);
+    }
+
+    #[test]
     fn edge_on_ray_misses() {
         let r = Ray::new(Vec3::new(-1.0, 0.25, 0.0), Vec3::X);
         assert!(tri().intersect(&r, 0.0, f32::INFINITY).is_none());
@@ -103,5 +285,68 @@ mod tests {
         assert_eq!(t.normal, Vec3::ZERO);
         let r = Ray::new(Vec3::new(0.5, 0.0, 1.0), Vec3::NEG_Z);
         assert!(t.intersect(&r, 0.0, f32::INFINITY).is_none());
+    }
+
+    /// Two (nearly) coplanar triangles sharing an edge, rays crossing their
+    /// plane at points of that edge from many directions: every ray hits at
+    /// least one of them.
+    #[test]
+    fn shared_edge_has_no_gap() {
+        let (a, b) = (Vec3::new(0.1, 0.3, 0.7), Vec3::new(0.9, 0.6, 0.2));
+        let c = Vec3::new(0.2, 1.1, 0.4);
+        let d = a + b - c;
+        let halves = [Triangle::new(a, b, c), Triangle::new(b, a, d)];
+        let mut misses = 0;
+        for i in 0..2000 {
+            let s = (i as f32 * 0.618_034).fract();
+            let p = a + s * (b - a);
+            let from = p + Vec3::new((i as f32 * 0.37).sin(), 2.0, (i as f32 * 0.73).cos());
+            let r = Ray::new(from, p - from);
+            if halves
+                .iter()
+                .all(|t| t.intersect(&r, 0.0, f32::INFINITY).is_none())
+            {
+                misses += 1;
+            }
+        }
+        assert_eq!(misses, 0);
+    }
+
+    /// The free function is the method's arithmetic (an accelerator calling
+    /// it gets bit-identical answers).
+    #[test]
+    fn free_function_matches_method() {
+        let t = Triangle::new(Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 1.0, 2.5), Vec3::Z);
+        let from = Vec3::new(10.0, 0.0, 0.0);
+        let r = Ray::new(from, (t.v[0] + t.v[1] + t.v[2]) / 3.0 - from);
+        let w = WatertightRay::new(&r);
+        let [p0, p1, p2] = t.v;
+        assert_eq!(
+            intersect_triangle(&w, p0, p1, p2, 0.0, f32::INFINITY),
+            t.hit(&r, 0.0, f32::INFINITY)
+        );
+        assert!(t.hit(&r, 0.0, f32::INFINITY).is_some());
+    }
+
+    #[test]
+    fn interpolated_point_is_in_the_plane_within_its_error() {
+        let t = Triangle::new(
+            Vec3::new(1e5, 3.0, -2e4),
+            Vec3::new(1e5 + 7.0, 5.5, -2e4 + 1.0),
+            Vec3::new(1e5 + 1.0, -4.0, -2e4 + 6.0),
+        );
+        let from = Vec3::new(0.0, 100.0, 0.0);
+        let r = Ray::new(from, (t.v[0] + t.v[1] + t.v[2]) / 3.0 - from);
+        let h = t.intersect(&r, 0.0, f32::INFINITY).unwrap();
+        let sp = t.surface(&r, h);
+        let (a, b, c) = (t.v[0].as_dvec3(), t.v[1].as_dvec3(), t.v[2].as_dvec3());
+        let n = (b - a).cross(c - a).normalize();
+        let dist = n.dot(sp.p.as_dvec3() - a);
+        assert!(
+            dist.abs() <= sp.error.as_dvec3().dot(n.abs()),
+            "{dist} vs {}",
+            sp.error
+        );
+        assert!((sp.p - r.at(h)).length() < 0.1);
     }
 }

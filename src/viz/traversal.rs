@@ -12,7 +12,7 @@
 use super::draw::Canvas;
 use crate::accel::bvh::{Bvh, NodeVisit};
 use crate::accel::grid::Face;
-use crate::accel::{AccelKind, Grid, Octree, PrimHit};
+use crate::accel::{AccelKind, Grid, HierarchyBvh, NestedGrid, Octree, PrimHit, Storage};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::render::{pixel_of_screen, CameraModel};
 use crate::stats::Counters;
@@ -41,6 +41,11 @@ pub enum Structure {
     Octree(Octree),
     /// A binary BVH.
     Bvh(Bvh),
+    /// Nested grids (every level's cells; those holding a finer grid are
+    /// drawn as inner boxes).
+    NestedGrid(NestedGrid),
+    /// The BVH of the scene's groups and transforms.
+    Hierarchy(HierarchyBvh),
 }
 
 impl Structure {
@@ -54,7 +59,17 @@ impl Structure {
             AccelKind::None => return None,
             AccelKind::Grid { res } => Structure::Grid(Grid::new(&world.prims, ids, res)),
             AccelKind::Octree => Structure::Octree(Octree::new(&world.prims, ids)),
+            AccelKind::OctreeInner => {
+                Structure::Octree(Octree::with_storage(&world.prims, ids, Storage::Inner))
+            }
             AccelKind::Bvh(split) => Structure::Bvh(Bvh::new(&world.prims, ids, split)),
+            AccelKind::NestedGrid { threshold, depth } => {
+                Structure::NestedGrid(NestedGrid::new(&world.prims, ids, threshold, depth))
+            }
+            AccelKind::BvhHierarchy => {
+                // Built from the world's recorded scene tree, as the renderer's.
+                Structure::Hierarchy(HierarchyBvh::new(&world.prims, ids, &world.scene_tree))
+            }
         })
     }
 
@@ -80,8 +95,29 @@ impl Structure {
                     visits.push(Visit {
                         bounds: leaf.bounds,
                         entered: true,
-                        leaf: true,
+                        // With `octree-inner`, inner nodes holding primitives too.
+                        leaf: leaf.is_leaf,
                         face: entry_face(&leaf.bounds, ray, leaf.t_enter),
+                    })
+                })
+            }
+            Structure::NestedGrid(g) => {
+                g.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |v| {
+                    visits.push(Visit {
+                        bounds: v.bounds,
+                        entered: true,
+                        leaf: !v.finer,
+                        face: v.entered,
+                    })
+                })
+            }
+            Structure::Hierarchy(h) => {
+                h.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |v| {
+                    visits.push(Visit {
+                        bounds: v.bounds,
+                        entered: v.entered,
+                        leaf: v.leaf,
+                        face: None,
                     })
                 })
             }

@@ -1,16 +1,26 @@
-//! Scene → World: flattening the transform hierarchy.
+//! Scene → World: flattening the transform hierarchy into rendering space.
 //!
 //! Why flatten: a ray that meets a transform node has to be carried into the
 //! child's space (two matrix products) before every test below it. Baking
 //! triangles, similarity-transformed spheres and planes into world space once
 //! at load removes that cost from every ray; only what cannot be baked (a
 //! sphere under non-uniform scale) keeps a [`Transformed`] wrapper.
+//!
+//! Why f64: every matrix product, and the translation into rendering space
+//! (camera at the origin, see [`crate::world`]), is done in f64 and rounded
+//! to f32 once per vertex, centre or plane. A scene placed at `10⁵` and
+//! translated back then lands on the same f32 values as the same scene
+//! placed at the origin: translating in f32 would round every coordinate to
+//! the ulp of `10⁵` (0.008) first.
 
 use super::{Primitive, World};
-use crate::accel::{AccelKind, Aggregate, Brute, Bvh, Grid, Octree};
-use crate::math::{Mat4, Vec3};
-use crate::scene::{Material, Node, Phong, Scene, Shape as Desc};
+use crate::accel::{
+    AccelKind, Aggregate, Brute, Bvh, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree, Storage,
+};
+use crate::math::Vec3;
+use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
 use crate::shape::{Moving, Plane, Shape, Sphere, Transformed, Triangle};
+use glam::{DMat4, DVec3};
 use std::time::Instant;
 
 /// How to build the world.
@@ -32,64 +42,170 @@ impl Default for BuildOptions {
 }
 
 impl World {
-    /// Flattens `scene` and builds the aggregate.
+    /// Flattens `scene` into rendering space (the camera's centre at the
+    /// origin) and builds the aggregate.
     pub fn build(scene: &Scene, opts: BuildOptions) -> World {
-        let mut materials = scene.materials.clone();
-        let default_material = materials.len() as u32;
-        materials.push(Material::Phong(Phong::default()));
+        World::build_at(scene, opts, camera_center(&scene.camera).as_dvec3())
+    }
+
+    /// [`World::build`] without the move into rendering space: everything
+    /// stays in world coordinates. For tools whose output must line up with
+    /// the scene file (visualisations exporting geometry, `glint info`'s
+    /// bounds), where f32 precision far from the camera does not matter.
+    pub fn build_world_space(scene: &Scene, opts: BuildOptions) -> World {
+        World::build_at(scene, opts, DVec3::ZERO)
+    }
+
+    /// [`World::build`] with the rendering-space origin at the world-space
+    /// point `origin` (`DVec3::ZERO`: render in world space, as glint did
+    /// before rendering space; kept to measure what it brings).
+    pub fn build_at(scene: &Scene, opts: BuildOptions, origin: DVec3) -> World {
+        let mut object_materials = scene.materials.clone();
+        let default_material = object_materials.len() as u32;
+        object_materials.push(Material::Phong(Phong::default()));
+        let materials = object_materials
+            .iter()
+            .map(|m| to_render_space(m, origin))
+            .collect();
+        let render_from_world = DMat4::from_translation(-origin);
         let mut f = Flattener {
             prims: Vec::new(),
-            object_from_world: vec![Mat4::IDENTITY],
+            object_from_world: vec![DMat4::from_translation(origin).as_mat4()],
             default_material,
             flatten: opts.flatten,
         };
-        f.node(&scene.root, Mat4::IDENTITY, 0);
+        let tree = f.node(&scene.root, render_from_world, 0);
         let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
             (0..f.prims.len() as u32).partition(|&i| f.prims[i as usize].bounds().is_finite());
         let start = Instant::now();
-        let accel = build_aggregate(opts.accel, &f.prims, bounded);
+        let accel = build_aggregate(opts.accel, &f.prims, bounded, &tree);
         World {
             build_ms: start.elapsed().as_secs_f64() * 1e3,
             prims: f.prims,
             accel,
             unbounded,
             materials,
-            lights: scene.lights.clone(),
+            object_materials,
+            lights: scene
+                .lights
+                .iter()
+                .map(|l| light_to_render_space(l, origin))
+                .collect(),
+            camera: camera_to_render_space(&scene.camera, origin),
+            origin,
             background: scene.background.clone(),
             object_from_world: f.object_from_world,
+            scene_tree: tree,
         }
     }
 }
 
-fn build_aggregate(kind: AccelKind, prims: &[Primitive], ids: Vec<u32>) -> Box<dyn Aggregate> {
+fn camera_center(c: &Camera) -> Vec3 {
+    match c {
+        Camera::Orthographic { center, .. } | Camera::Perspective { center, .. } => *center,
+    }
+}
+
+/// A world-space point in rendering space: subtracted in f64, rounded once.
+fn point_to_render(p: Vec3, origin: DVec3) -> Vec3 {
+    (p.as_dvec3() - origin).as_vec3()
+}
+
+fn camera_to_render_space(c: &Camera, origin: DVec3) -> Camera {
+    let mut c = c.clone();
+    match &mut c {
+        Camera::Orthographic { center, .. } | Camera::Perspective { center, .. } => {
+            *center = point_to_render(*center, origin)
+        }
+    }
+    c
+}
+
+fn light_to_render_space(l: &Light, origin: DVec3) -> Light {
+    let mut l = l.clone();
+    match &mut l {
+        Light::Point { position, .. } => *position = point_to_render(*position, origin),
+        Light::Area { shape, .. } => match shape {
+            AreaShape::Quad { corner, .. } => *corner = point_to_render(*corner, origin),
+            AreaShape::Disk { center, .. } | AreaShape::Sphere { center, .. } => {
+                *center = point_to_render(*center, origin)
+            }
+        },
+        Light::Directional { .. } => {}
+    }
+    l
+}
+
+/// The 6.837 textures' matrices map *world* points into texture space; a
+/// lookup now gets a rendering-space point `p − origin`, so the translation
+/// back to world space is folded into each matrix (in f64), which keeps the
+/// texture exactly where it was.
+fn to_render_space(m: &Material, origin: DVec3) -> Material {
+    match m {
+        Material::Phong(_) => m.clone(),
+        Material::Texture {
+            kind,
+            transform,
+            a,
+            b,
+        } => Material::Texture {
+            kind: kind.clone(),
+            transform: (transform.as_dmat4() * DMat4::from_translation(origin)).as_mat4(),
+            a: *a,
+            b: *b,
+        },
+    }
+}
+
+/// `tree` is the scene's hierarchy over the primitives, for `bvh-hierarchy`.
+fn build_aggregate(
+    kind: AccelKind,
+    prims: &[Primitive],
+    ids: Vec<u32>,
+    tree: &SceneTree,
+) -> Box<dyn Aggregate> {
     match kind {
         AccelKind::None => Box::new(Brute::new(prims, ids)),
         AccelKind::Grid { res } => Box::new(Grid::new(prims, ids, res)),
         AccelKind::Octree => Box::new(Octree::new(prims, ids)),
         AccelKind::Bvh(split) => Box::new(Bvh::new(prims, ids, split)),
+        AccelKind::OctreeInner => Box::new(Octree::with_storage(prims, ids, Storage::Inner)),
+        AccelKind::NestedGrid { threshold, depth } => {
+            Box::new(NestedGrid::new(prims, ids, threshold, depth))
+        }
+        AccelKind::BvhHierarchy => Box::new(HierarchyBvh::new(prims, ids, tree)),
     }
 }
 
 struct Flattener {
     prims: Vec<Primitive>,
-    object_from_world: Vec<Mat4>,
+    object_from_world: Vec<glam::Mat4>,
     default_material: u32,
     flatten: bool,
 }
 
 impl Flattener {
-    fn node(&mut self, node: &Node, m: Mat4, instance: u32) {
+    /// Flattens `node`, whose space `m` maps into rendering space, and
+    /// returns its tree over the primitives it became (the modeling
+    /// hierarchy `bvh-hierarchy` uses).
+    fn node(&mut self, node: &Node, m: DMat4, instance: u32) -> SceneTree {
         match node {
-            Node::Group(children) => children.iter().for_each(|c| self.node(c, m, instance)),
+            Node::Group(children) => {
+                SceneTree::Group(children.iter().map(|c| self.node(c, m, instance)).collect())
+            }
             Node::Transform { matrix, child } => {
-                let m = m * *matrix;
+                let m = m * matrix.as_dmat4();
                 let inv = m.inverse();
                 if !inv.is_finite() || m.determinant() == 0.0 {
-                    return; // a singular transform squashes its subtree to nothing visible
+                    // A singular transform squashes its subtree to nothing visible.
+                    return SceneTree::Group(Vec::new());
                 }
-                self.object_from_world.push(inv);
+                self.object_from_world.push(inv.as_mat4());
                 let instance = (self.object_from_world.len() - 1) as u32;
-                self.node(child, m, instance);
+                SceneTree::Transform {
+                    to_world: m.as_mat4(),
+                    child: Box::new(self.node(child, m, instance)),
+                }
             }
             Node::Moving { motion, child } => {
                 // The subtree is flattened in the motion's object space and
@@ -97,63 +213,71 @@ impl Flattener {
                 // inside are baked as usual, the motion and the static part
                 // outside are applied per ray at the ray's time.
                 let start = self.prims.len();
-                self.node(child, Mat4::IDENTITY, instance);
+                self.node(child, DMat4::IDENTITY, instance);
                 let inner: Vec<Primitive> = self.prims.drain(start..).collect();
+                let parent = m.as_mat4();
                 for p in inner {
-                    if let Some(mv) = Moving::new(p.shape, motion.clone(), m) {
+                    if let Some(mv) = Moving::new(p.shape, motion.clone(), parent) {
                         self.prims.push(Primitive {
                             shape: Shape::Moving(Box::new(mv)),
                             ..p
                         });
                     }
                 }
+                // The primitives share one swept path: to `bvh-hierarchy`
+                // they are one shape, split like a mesh's triangles.
+                SceneTree::Shape(start as u32..self.prims.len() as u32)
             }
             Node::Shape { shape, material } => {
-                let material = material.map_or(self.default_material, |i| i as u32);
-                let mut push = |shape: Shape| {
-                    self.prims.push(Primitive {
-                        shape,
-                        material,
-                        instance,
-                    })
-                };
-                let identity = m == Mat4::IDENTITY;
-                if !self.flatten && !identity {
-                    for s in object_shapes(shape) {
-                        if let Some(x) = Transformed::new(s, m) {
-                            push(Shape::Transformed(Box::new(x)));
-                        }
-                    }
-                    return;
+                let start = self.prims.len() as u32;
+                self.shape(shape, *material, m, instance);
+                SceneTree::Shape(start..self.prims.len() as u32)
+            }
+        }
+    }
+
+    /// Pushes the primitives of one shape whose space `m` maps into
+    /// rendering space.
+    fn shape(&mut self, shape: &Desc, material: Option<usize>, m: DMat4, instance: u32) {
+        let material = material.map_or(self.default_material, |i| i as u32);
+        let mut push = |shape: Shape| {
+            self.prims.push(Primitive {
+                shape,
+                material,
+                instance,
+            })
+        };
+        // Instance 0: under no scene transform, only the rendering-space
+        // translation, which is always baked.
+        if !self.flatten && instance != 0 {
+            for s in object_shapes(shape) {
+                if let Some(x) = Transformed::from_f64(s, m) {
+                    push(Shape::Transformed(Box::new(x)));
                 }
-                match shape {
-                    Desc::Sphere { center, radius } => {
-                        let s = Sphere {
-                            center: *center,
-                            radius: *radius,
-                        };
-                        push(bake_sphere(s, m));
-                    }
-                    Desc::Plane { normal, offset } => {
-                        if let Some(p) =
-                            Plane::new(*normal, *offset).and_then(|p| p.transformed(&m))
-                        {
-                            push(Shape::Plane(p));
-                        }
-                    }
-                    Desc::Triangle(v) => push(Shape::Triangle(bake_triangle(v, &m))),
-                    Desc::Mesh(mesh) => {
-                        let pos: Vec<Vec3> = mesh
-                            .positions
-                            .iter()
-                            .map(|&p| m.transform_point3(p))
-                            .collect();
-                        let flip = m.determinant() < 0.0;
-                        for t in &mesh.triangles {
-                            let [a, b, c] = t.map(|i| pos[i as usize]);
-                            push(Shape::Triangle(oriented(a, b, c, flip)));
-                        }
-                    }
+            }
+            return;
+        }
+        let point = |p: Vec3| m.transform_point3(p.as_dvec3()).as_vec3();
+        match shape {
+            Desc::Sphere { center, radius } => {
+                let s = Sphere {
+                    center: *center,
+                    radius: *radius,
+                };
+                push(bake_sphere(s, m));
+            }
+            Desc::Plane { normal, offset } => {
+                if let Some(p) = Plane::new(*normal, *offset).and_then(|p| p.transformed(&m)) {
+                    push(Shape::Plane(p));
+                }
+            }
+            Desc::Triangle(v) => push(Shape::Triangle(bake_triangle(v, &m))),
+            Desc::Mesh(mesh) => {
+                let pos: Vec<Vec3> = mesh.positions.iter().map(|&p| point(p)).collect();
+                let flip = m.determinant() < 0.0;
+                for t in &mesh.triangles {
+                    let [a, b, c] = t.map(|i| pos[i as usize]);
+                    push(Shape::Triangle(oriented(a, b, c, flip)));
                 }
             }
         }
@@ -183,8 +307,8 @@ fn object_shapes(d: &Desc) -> Vec<Shape> {
     }
 }
 
-fn bake_triangle(v: &[Vec3; 3], m: &Mat4) -> Triangle {
-    let [a, b, c] = v.map(|p| m.transform_point3(p));
+fn bake_triangle(v: &[Vec3; 3], m: &DMat4) -> Triangle {
+    let [a, b, c] = v.map(|p| m.transform_point3(p.as_dvec3()).as_vec3());
     oriented(a, b, c, m.determinant() < 0.0)
 }
 
@@ -200,29 +324,30 @@ fn oriented(a: Vec3, b: Vec3, c: Vec3, flip: bool) -> Triangle {
 
 /// A sphere under a similarity (rotation, uniform scale, translation) is a
 /// sphere; anything else keeps its matrix.
-fn bake_sphere(s: Sphere, m: Mat4) -> Shape {
+fn bake_sphere(s: Sphere, m: DMat4) -> Shape {
     let cols = [
         m.x_axis.truncate(),
         m.y_axis.truncate(),
         m.z_axis.truncate(),
     ];
     let scale = cols[0].length();
-    let rel = 1e-5 * scale.max(1e-30);
+    let rel = 1e-5 * scale.max(1e-300);
     let uniform = cols.iter().all(|c| (c.length() - scale).abs() <= rel)
         && cols[0].dot(cols[1]).abs() <= rel * scale
         && cols[1].dot(cols[2]).abs() <= rel * scale
         && cols[0].dot(cols[2]).abs() <= rel * scale
-        && m.row(3) == glam::Vec4::W;
+        && m.row(3) == glam::DVec4::W;
+    let center = m.transform_point3(s.center.as_dvec3()).as_vec3();
     if uniform {
         Shape::Sphere(Sphere {
-            center: m.transform_point3(s.center),
-            radius: s.radius * scale,
+            center,
+            radius: (s.radius as f64 * scale) as f32,
         })
     } else {
-        match Transformed::new(Shape::Sphere(s), m) {
+        match Transformed::from_f64(Shape::Sphere(s), m) {
             Some(x) => Shape::Transformed(Box::new(x)),
             None => Shape::Sphere(Sphere {
-                center: m.transform_point3(s.center),
+                center,
                 radius: 0.0,
             }),
         }
@@ -232,7 +357,7 @@ fn bake_sphere(s: Sphere, m: Mat4) -> Shape {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Ray;
+    use crate::math::{Mat4, Ray};
     use crate::scene::{Background, Camera};
     use crate::stats::Counters;
 
@@ -336,7 +461,7 @@ mod tests {
 
     #[test]
     fn mirrored_triangle_keeps_inverse_transpose_normal() {
-        let m = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        let m = DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0));
         let t = bake_triangle(&[Vec3::ZERO, Vec3::X, Vec3::Y], &m);
         // (M^-1)^T (0,0,1) = (0,0,1).
         assert!((t.normal - Vec3::Z).length() < 1e-6);

@@ -1,6 +1,16 @@
 //! The world rays are shot at: the scene's object tree flattened into a list
-//! of world-space primitives, an aggregate over the bounded ones, and the
-//! unbounded ones (planes) tested on every ray.
+//! of primitives, an aggregate over the bounded ones, and the unbounded ones
+//! (planes) tested on every ray.
+//!
+//! **Rendering space.** Everything in a [`World`] (primitives, lights, its
+//! camera, texture and object matrices, every ray and hit) is in *rendering
+//! space*: world space translated so that the camera sits at the origin
+//! (pbrt-v4's "camera-world" space). f32 resolution is finest near 0, so it
+//! is spent where the image is, and a scene far from the world's origin
+//! renders like the same scene near it. The translation is applied in f64 at
+//! build time ([`World::origin`] is where the rendering-space origin lies in
+//! world space); rays for a world come from [`World::camera`], and a
+//! world-space point or ray is brought in with [`World::ray_from_world`].
 
 mod build;
 
@@ -8,17 +18,21 @@ pub use crate::primitive::Primitive;
 pub use build::BuildOptions;
 
 use crate::accel::Aggregate;
-use crate::math::{Aabb, Mat4, Ray, Vec3};
-use crate::scene::{Background, Light, Material};
+use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
+use crate::scene::{Background, Camera, Light, Material};
 use crate::stats::Counters;
+use glam::DVec3;
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Ray parameter.
     pub t: f32,
-    /// World-space point.
+    /// The point (rendering space).
     pub point: Vec3,
+    /// Per-axis bound on the floating-point error of `point`: the true
+    /// surface point lies within `point ± error`.
+    pub error: Vec3,
     /// Unit geometric normal (the shape's outward/front side, not flipped
     /// towards the ray).
     pub normal: Vec3,
@@ -30,7 +44,26 @@ pub struct Hit {
     pub instance: u32,
 }
 
-/// Everything the integrator needs: geometry, materials, lights, background.
+impl Hit {
+    /// The hit as a [`SurfacePoint`], from which secondary rays are spawned.
+    #[inline]
+    pub fn surface_point(&self) -> SurfacePoint {
+        SurfacePoint {
+            p: self.point,
+            error: self.error,
+            n: self.normal,
+        }
+    }
+
+    /// A ray leaving the hit in direction `dir` (trace it with `t > 0`).
+    #[inline]
+    pub fn spawn_ray(&self, dir: Vec3) -> Ray {
+        self.surface_point().spawn_ray(dir)
+    }
+}
+
+/// Everything the integrator needs: geometry, materials, lights, background,
+/// all in rendering space (see the module documentation).
 pub struct World {
     /// All primitives.
     pub prims: Vec<Primitive>,
@@ -38,17 +71,31 @@ pub struct World {
     pub accel: Box<dyn Aggregate>,
     /// Primitives with infinite bounds (planes), tested on every ray.
     pub unbounded: Vec<u32>,
-    /// Material table (the scene's, plus a default for shapes that had none).
+    /// Material table (the scene's, plus a default for shapes that had none),
+    /// for lookups at rendering-space points: texture matrices have the
+    /// translation back to world space folded in (in f64), so a texture
+    /// stays exactly where the scene put it.
     pub materials: Vec<Material>,
-    /// Lights.
+    /// The same table with the scene's own texture matrices, for lookups at
+    /// object-space points (`TextureSpace::Object`).
+    pub object_materials: Vec<Material>,
+    /// Lights (point lights moved into rendering space).
     pub lights: Vec<Light>,
+    /// The scene's camera in rendering space (its centre at the origin):
+    /// build the [`crate::render::CameraModel`] for this world from it.
+    pub camera: Camera,
+    /// Where the rendering-space origin lies in world space.
+    pub origin: DVec3,
     /// Background and ambient light.
     pub background: Background,
-    /// World-to-object matrices, indexed by [`Primitive::instance`]; entry 0 is
-    /// the identity.
+    /// Rendering-space-to-object matrices, indexed by [`Primitive::instance`];
+    /// entry 0 is the rendering-to-world translation.
     pub object_from_world: Vec<Mat4>,
     /// Milliseconds spent building the aggregate.
     pub build_ms: f64,
+    /// The scene's object tree over `prims` (groups, transforms, shapes), as
+    /// flattening met it: what `bvh-hierarchy` is built from.
+    pub scene_tree: crate::accel::SceneTree,
 }
 
 impl World {
@@ -65,11 +112,12 @@ impl World {
         }
         best.map(|h| {
             let p = &self.prims[h.prim as usize];
-            let point = ray.at(h.t);
+            let s = p.shape.surface(ray, h.t);
             Hit {
                 t: h.t,
-                point,
-                normal: p.shape.normal(point, ray.time),
+                point: s.p,
+                error: s.error,
+                normal: s.n,
                 prim: h.prim,
                 material: p.material,
                 instance: p.instance,
@@ -86,6 +134,18 @@ impl World {
                 .intersect(ray, tmin, tmax)
                 .is_some()
         }) || self.accel.occluded(&self.prims, ray, tmin, tmax, c)
+    }
+
+    /// A world-space ray in this world's rendering space (the origin moved
+    /// in f64; `t` is unchanged).
+    pub fn ray_from_world(&self, ray: &Ray) -> Ray {
+        Ray::new((ray.origin.as_dvec3() - self.origin).as_vec3(), ray.dir)
+    }
+
+    /// A rendering-space point in world space (in f64, exactly as the
+    /// rendering space was made).
+    pub fn point_to_world(&self, p: Vec3) -> DVec3 {
+        p.as_dvec3() + self.origin
     }
 
     /// Bounds of the bounded primitives (planes excluded).

@@ -134,6 +134,10 @@ impl Aggregate for Bvh {
         self.bounds
     }
 
+    fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>() + self.ids.len() * 4
+    }
+
     fn describe(&self) -> String {
         format!("bvh-{} {} nodes", self.split, self.nodes.len())
     }

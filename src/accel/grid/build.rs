@@ -14,18 +14,31 @@ const MAX_AUTO_RES: u32 = 128;
 /// scaled down uniformly so a typo on the command line cannot exhaust memory.
 const MAX_CELLS: f64 = (1u64 << 24) as f64;
 
+/// Cells along the longest axis per `∛n` that the uniform grid picks.
+pub(crate) const DENSITY: f32 = 3.0;
+
+/// Cells per axis for `n` primitives in `bounds` (see [`resolution_with`]).
+pub(crate) fn resolution(bounds: &Aabb, n: usize, fixed: Option<[u32; 3]>) -> [u32; 3] {
+    resolution_with(bounds, n, fixed, DENSITY)
+}
+
 /// Cells per axis for `n` primitives in `bounds`.
 ///
-/// Automatic: `3·∛n` cells along the longest axis, the other axes scaled by
+/// Automatic: `density·∛n` cells (`density` is [`DENSITY`] for the uniform grid) along the longest axis, the other axes scaled by
 /// the box's aspect so cells are roughly cubes (pbrt's rule; about 27 cells
 /// per primitive for a cube-shaped scene, a few primitives per cell for
 /// surfaces); every axis ≥ 1 (a flat scene gets one layer), ≤ 128.
-pub(super) fn resolution(bounds: &Aabb, n: usize, fixed: Option<[u32; 3]>) -> [u32; 3] {
+pub(crate) fn resolution_with(
+    bounds: &Aabb,
+    n: usize,
+    fixed: Option<[u32; 3]>,
+    density: f32,
+) -> [u32; 3] {
     let res = match fixed {
         Some(r) => r.map(|v| v.max(1)),
         None => {
             let ext = bounds.extent();
-            let per_unit = 3.0 * (n.max(1) as f32).cbrt() / ext.max_element();
+            let per_unit = density * (n.max(1) as f32).cbrt() / ext.max_element();
             [0, 1, 2].map(|a| ((ext[a] * per_unit).round() as u32).clamp(1, MAX_AUTO_RES))
         }
     };
@@ -60,7 +73,26 @@ pub(super) fn build(prims: &[Primitive], ids: &[u32], fixed: Option<[u32; 3]>) -
         resolution(&padded_bounds, ids.len(), fixed)
     };
     let lattice = Lattice::new(padded_bounds, res);
+    let (offsets, items) = fill(prims, ids, &lattice, m);
+    Grid {
+        lattice,
+        offsets,
+        items,
+        bounds,
+        mailbox: true,
+    }
+}
 
+/// Puts each of `ids` into the cells of `lattice` it overlaps (cells padded
+/// by `m`) and returns the cells in CSR form: cell `k` holds
+/// `items[offsets[k]..offsets[k + 1]]`. The lattice is the caller's region,
+/// so the nested grid fills a crowded cell's box with the same code.
+pub(crate) fn fill(
+    prims: &[Primitive],
+    ids: &[u32],
+    lattice: &Lattice,
+    m: f32,
+) -> (Vec<u32>, Vec<u32>) {
     let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(ids.len() * 2);
     for &id in ids {
         let shape = &prims[id as usize].shape;
@@ -100,13 +132,7 @@ pub(super) fn build(prims: &[Primitive], ids: &[u32], fixed: Option<[u32; 3]>) -
         items[next[cell as usize] as usize] = id;
         next[cell as usize] += 1;
     }
-    Grid {
-        lattice,
-        offsets,
-        items,
-        bounds,
-        mailbox: true,
-    }
+    (offsets, items)
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@
 //! and stops once that hit is no farther than the current cell's exit: a hit
 //! beyond the cell might still be beaten by a primitive in a later cell.
 
-mod build;
+pub(crate) mod build;
 mod traverse;
 
 pub use traverse::{Cell, CellWalk, Face};
@@ -210,6 +210,10 @@ impl Aggregate for Grid {
 
     fn bounds(&self) -> Aabb {
         self.bounds
+    }
+
+    fn memory_bytes(&self) -> usize {
+        (self.offsets.len() + self.items.len()) * 4
     }
 
     fn describe(&self) -> String {

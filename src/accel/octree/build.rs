@@ -1,12 +1,12 @@
 //! Building an octree: split while crowded, push primitives down.
 
-use super::{child_box, child_codes, split_axes, Node, Octree, LEAF_SIZE, MAX_DEPTH};
+use super::{child_box, child_codes, split_axes, Node, Octree, Storage, LEAF_SIZE, MAX_DEPTH};
 use crate::accel::overlap::{margin, padded, shape_overlaps};
 use crate::math::Aabb;
 use crate::primitive::Primitive;
 
 /// Builds the tree over `ids`.
-pub(super) fn build(prims: &[Primitive], ids: &[u32]) -> Octree {
+pub(super) fn build(prims: &[Primitive], ids: &[u32], storage: Storage) -> Octree {
     let bounds = ids
         .iter()
         .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
@@ -22,6 +22,8 @@ pub(super) fn build(prims: &[Primitive], ids: &[u32]) -> Octree {
         nodes: vec![Node::Leaf { start: 0, count: 0 }],
         items: Vec::new(),
         depth: 0,
+        storage,
+        inner_refs: 0,
     };
     b.node(0, root, ids.to_vec(), 0);
     Octree {
@@ -30,6 +32,8 @@ pub(super) fn build(prims: &[Primitive], ids: &[u32]) -> Octree {
         root,
         bounds,
         depth: b.depth,
+        storage,
+        inner_refs: b.inner_refs,
     }
 }
 
@@ -42,6 +46,8 @@ struct Builder<'a> {
     nodes: Vec<Node>,
     items: Vec<u32>,
     depth: u32,
+    storage: Storage,
+    inner_refs: usize,
 }
 
 impl Builder<'_> {
@@ -57,13 +63,17 @@ impl Builder<'_> {
     /// on a split plane), where more levels would only copy the same lists
     /// into ever more cells; a tight cluster in one corner still splits,
     /// since its child is a quarter of the area.
+    ///
+    /// With [`Storage::Inner`], primitives overlapping more than one child
+    /// stay here; they cost one test per ray entering the node either way,
+    /// so they are added to the split's cost as they are.
     fn node(&mut self, k: usize, bx: Aabb, ids: Vec<u32>, depth: u32) {
         self.depth = self.depth.max(depth);
         if ids.len() <= LEAF_SIZE || depth >= MAX_DEPTH {
             return self.leaf(k, &ids);
         }
         let axes = split_axes(&bx);
-        let children: Vec<(Aabb, Vec<u32>)> = child_codes(axes)
+        let mut children: Vec<(Aabb, Vec<u32>)> = child_codes(axes)
             .map(|c| {
                 let cb = child_box(&bx, c, axes);
                 // Padded like the grid's cells: a primitive touching the split
@@ -78,8 +88,13 @@ impl Builder<'_> {
                 (cb, ch)
             })
             .collect();
+        let kept = match self.storage {
+            Storage::Leaves => Vec::new(),
+            Storage::Inner => keep_straddlers(&ids, &mut children),
+        };
         let area = bx.surface_area();
         let cost = TRAVERSAL_COST
+            + kept.len() as f32
             + children
                 .iter()
                 .map(|(cb, ch)| cb.surface_area() / area * ch.len() as f32)
@@ -91,7 +106,11 @@ impl Builder<'_> {
         self.nodes[k] = Node::Inner {
             first: first as u32,
             axes,
+            start: self.items.len() as u32,
+            count: kept.len() as u32,
         };
+        self.items.extend_from_slice(&kept);
+        self.inner_refs += kept.len();
         self.nodes
             .extend(children.iter().map(|_| Node::Leaf { start: 0, count: 0 }));
         for (s, (cb, ch)) in children.into_iter().enumerate() {
@@ -100,10 +119,27 @@ impl Builder<'_> {
     }
 
     fn leaf(&mut self, k: usize, ids: &[u32]) {
+        debug_assert!(matches!(self.nodes[k], Node::Leaf { .. }));
         self.nodes[k] = Node::Leaf {
             start: self.items.len() as u32,
             count: ids.len() as u32,
         };
         self.items.extend_from_slice(ids);
     }
+}
+
+/// Removes from `children` every id listed in more than one of them and
+/// returns those ids (in `ids` order): they stay at the parent.
+fn keep_straddlers(ids: &[u32], children: &mut [(Aabb, Vec<u32>)]) -> Vec<u32> {
+    let mut count: std::collections::HashMap<u32, u8> = std::collections::HashMap::new();
+    for (_, ch) in children.iter() {
+        for &id in ch {
+            *count.entry(id).or_default() += 1;
+        }
+    }
+    let straddles = |id: &u32| count.get(id).is_some_and(|&n| n > 1);
+    for (_, ch) in children.iter_mut() {
+        ch.retain(|id| !straddles(id));
+    }
+    ids.iter().copied().filter(|id| straddles(id)).collect()
 }

@@ -16,11 +16,29 @@
 //! duplicated across leaves, is kept down by the exact triangle/sphere–box
 //! test and the subdivision limits, and the mailbox keeps a duplicated
 //! primitive from being tested twice by one ray.
+//!
+//! The other policy is there to measure it ([`Storage::Inner`],
+//! `--accel octree-inner`): a primitive that overlaps more than one child
+//! stays at the node, is tested when a ray enters the node (before its
+//! children), and is never copied. The walk then also yields the inner nodes
+//! that hold primitives, with `t_exit = t_enter`: after testing them only the
+//! part of the ray before the node is known to be done, which keeps the early
+//! exit exact.
 
 mod build;
 mod traverse;
 
 pub use traverse::{Leaf, LeafWalk};
+
+/// Where a primitive that straddles a split plane is stored.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Storage {
+    /// Pushed down into every child it overlaps (the default).
+    #[default]
+    Leaves,
+    /// Kept at the inner node where it straddles a split.
+    Inner,
+}
 
 use super::mailbox::Mailbox;
 use super::{Aggregate, PrimHit};
@@ -47,6 +65,10 @@ pub(crate) enum Node {
         first: u32,
         /// Bit `a` set when the node is halved along axis `a`.
         axes: u8,
+        /// First of the primitives kept at this node ([`Storage::Inner`]).
+        start: u32,
+        /// Number of primitives kept here (always 0 with [`Storage::Leaves`]).
+        count: u32,
     },
     /// `items[start..start + count]`.
     Leaf {
@@ -122,12 +144,20 @@ pub struct Octree {
     /// Unpadded union of the primitives' boxes.
     bounds: Aabb,
     depth: u32,
+    storage: Storage,
+    /// References kept at inner nodes.
+    inner_refs: usize,
 }
 
 impl Octree {
-    /// An octree over the primitives `ids` of `prims`.
+    /// An octree over the primitives `ids` of `prims`, primitives in leaves.
     pub fn new(prims: &[Primitive], ids: Vec<u32>) -> Self {
-        build::build(prims, &ids)
+        build::build(prims, &ids, Storage::Leaves)
+    }
+
+    /// An octree with the given storage policy.
+    pub fn with_storage(prims: &[Primitive], ids: Vec<u32>, storage: Storage) -> Self {
+        build::build(prims, &ids, storage)
     }
 
     /// The leaves `ray` crosses within `[tmin, tmax]`, front to back.
@@ -182,7 +212,12 @@ impl Octree {
         self.nodes.len()
     }
 
-    /// References stored over all leaves.
+    /// References kept at inner nodes (0 with [`Storage::Leaves`]).
+    pub fn inner_references(&self) -> usize {
+        self.inner_refs
+    }
+
+    /// References stored over all nodes.
     pub fn references(&self) -> usize {
         self.items.len()
     }
@@ -203,7 +238,7 @@ impl Octree {
         while let Some((k, b, d)) = stack.pop() {
             match self.nodes[k] {
                 Node::Leaf { .. } => out.push((b, d, true)),
-                Node::Inner { first, axes } => {
+                Node::Inner { first, axes, .. } => {
                     out.push((b, d, false));
                     for c in child_codes(axes) {
                         let child = first as usize + slot(c, axes);
@@ -264,12 +299,21 @@ impl Aggregate for Octree {
     }
 
     fn describe(&self) -> String {
+        let name = match self.storage {
+            Storage::Leaves => "octree",
+            Storage::Inner => "octree-inner",
+        };
         format!(
-            "octree {} nodes, depth {}, {} refs",
+            "{name} {} nodes, depth {}, {} refs ({} at inner nodes)",
             self.nodes.len(),
             self.depth,
-            self.items.len()
+            self.items.len(),
+            self.inner_refs
         )
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>() + self.items.len() * 4
     }
 }
 
@@ -306,7 +350,15 @@ mod tests {
         assert_eq!(o.node_count(), 9);
         assert_eq!(o.depth(), 1);
         assert_eq!(o.references(), 64);
-        assert_eq!(o.nodes[0], Node::Inner { first: 1, axes: 7 });
+        assert_eq!(
+            o.nodes[0],
+            Node::Inner {
+                first: 1,
+                axes: 7,
+                start: 0,
+                count: 0
+            }
+        );
         assert_agrees(&o, &prims, 2000);
     }
 
@@ -361,5 +413,50 @@ mod tests {
         let prims = soup(12, 1500);
         let o = Octree::new(&prims, all(&prims));
         assert_agrees(&o, &prims, 3000);
+    }
+
+    #[test]
+    fn inner_storage_keeps_straddlers_and_agrees() {
+        let prims = soup(12, 1500);
+        let leaves = Octree::new(&prims, all(&prims));
+        let inner = Octree::with_storage(&prims, all(&prims), Storage::Inner);
+        assert!(inner.inner_references() > 0);
+        // Nothing is copied: each primitive is stored exactly once.
+        assert_eq!(inner.references(), prims.len());
+        assert!(leaves.references() > prims.len());
+        assert_agrees(&inner, &prims, 3000);
+    }
+
+    #[test]
+    fn a_straddling_sphere_stays_at_the_root() {
+        // 64 small spheres on a lattice plus one big sphere across the middle.
+        let mut prims: Vec<Primitive> = (0..64)
+            .map(|i| {
+                let p = Vec3::new((i % 4) as f32, (i / 4 % 4) as f32, (i / 16) as f32);
+                sphere(p, 0.2)
+            })
+            .collect();
+        prims.push(sphere(Vec3::splat(1.5), 0.3));
+        let o = Octree::with_storage(&prims, all(&prims), Storage::Inner);
+        assert_eq!(
+            o.nodes[0],
+            Node::Inner {
+                first: 1,
+                axes: 7,
+                start: 0,
+                count: 1
+            }
+        );
+        assert_eq!(o.items[0], 64);
+        let leaf_items: Vec<Leaf> = o
+            .walk(
+                &Ray::new(Vec3::new(1.5, 1.5, -5.0), Vec3::Z),
+                0.0,
+                f32::INFINITY,
+            )
+            .collect();
+        assert!(!leaf_items[0].is_leaf);
+        assert_eq!(leaf_items[0].t_enter, leaf_items[0].t_exit);
+        assert_agrees(&o, &prims, 2000);
     }
 }

@@ -12,9 +12,13 @@
 use super::{child_box, slot, Node, Octree, MAX_DEPTH};
 use crate::math::{Aabb, Ray, Vec3};
 
-/// One leaf of a walk.
+/// One leaf of a walk, or (with the inner storage policy) an inner node
+/// holding primitives, yielded before its children.
 #[derive(Clone, Copy, Debug)]
 pub struct Leaf<'a> {
+    /// False for an inner node's own primitives: its `t_exit` is then its
+    /// `t_enter` (its children, still to come, cover the rest of its span).
+    pub is_leaf: bool,
     /// Node index.
     pub node: u32,
     /// The leaf's box.
@@ -154,11 +158,31 @@ impl<'a> Iterator for LeafWalk<'a> {
             let e = self.stack[self.len];
             self.visited += 1;
             match self.tree.nodes[e.node as usize] {
-                Node::Inner { first, axes } => self.push_children(&e, first, axes),
+                Node::Inner {
+                    first,
+                    axes,
+                    start,
+                    count,
+                } => {
+                    self.push_children(&e, first, axes);
+                    if count > 0 {
+                        let tree: &'a Octree = self.tree;
+                        return Some(Leaf {
+                            is_leaf: false,
+                            node: e.node,
+                            bounds: e.bounds,
+                            depth: e.depth,
+                            t_enter: e.t0,
+                            t_exit: e.t0,
+                            items: &tree.items[start as usize..(start + count) as usize],
+                        });
+                    }
+                }
                 Node::Leaf { start, count } => {
                     let tree: &'a Octree = self.tree;
                     let items = &tree.items[start as usize..(start + count) as usize];
                     return Some(Leaf {
+                        is_leaf: true,
                         node: e.node,
                         bounds: e.bounds,
                         depth: e.depth,

@@ -1,6 +1,8 @@
 //! `glint bench`: every accelerator on glint's own example scenes (by
 //! default) or the course's bunnies and 6.837 logo (`--course DIR`), plus any
-//! OBJ given (e.g. a generated mesh of a million triangles), in one table.
+//! OBJ given (e.g. a generated mesh of a million triangles), in one table;
+//! with glint's own scenes also two generated scenes with deep transform
+//! hierarchies (`deep.rs`), flattened and not.
 //!
 //! Times are medians of several runs in this one process, so the ratios
 //! between accelerators are taken under the same machine load.
@@ -29,21 +31,34 @@ pub struct BenchArgs {
     pub runs: usize,
     /// Brute force is skipped when its estimated time exceeds this.
     pub none_limit_s: f64,
-    /// Only the cases whose name contains this.
+    /// Only the cases whose name contains this (or, comma-separated, any of
+    /// these).
     pub only: Option<String>,
 }
 
-const ACCELS: [AccelKind; 6] = [
+const ACCELS: [AccelKind; 9] = [
     AccelKind::None,
     AccelKind::Grid { res: None },
+    AccelKind::NESTED_GRID,
     AccelKind::Octree,
+    AccelKind::OctreeInner,
     AccelKind::Bvh(Split::Midpoint),
     AccelKind::Bvh(Split::Median),
     AccelKind::Bvh(Split::Sah),
+    AccelKind::BvhHierarchy,
 ];
+
+/// One scene to bench, flattened or not (`--no-flatten` rows show what the
+/// hierarchy BVH's transform nodes save over per-primitive wrappers).
+struct Case {
+    name: String,
+    scene: Scene,
+    flatten: bool,
+}
 
 struct Row {
     build_ms: f64,
+    memory_kb: f64,
     render_ms: f64,
     tests_per_ray: f64,
     nodes_per_ray: f64,
@@ -53,6 +68,7 @@ struct Row {
 /// Runs the benchmark and prints the table (markdown) to stdout.
 pub fn run(args: &BenchArgs) -> Result<(), String> {
     let mut cases: Vec<(String, Scene)> = Vec::new();
+    let mut deep: Vec<(String, Scene)> = Vec::new();
     let (dir, names, stadium): (&Path, &[&str], _) = match &args.course {
         Some(dir) => (
             dir,
@@ -92,8 +108,36 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     for mesh in &args.meshes {
         cases.push((display_name(mesh), mesh_scene(mesh)?));
     }
+    if args.course.is_none() {
+        // Deep transform hierarchies, flattened and not.
+        deep.push(("tree_d5_b3".into(), super::deep::tree(5, 3)));
+        let knot = load_obj(&args.scenes.join("meshes/knot_1k.obj")).map_err(|e| e.render())?;
+        deep.push(("knot_1k_x64".into(), super::deep::instances(knot, 4)));
+    }
+    let mut cases: Vec<Case> = cases
+        .into_iter()
+        .map(|(name, scene)| Case {
+            name,
+            scene,
+            flatten: true,
+        })
+        .collect();
+    for (name, scene) in deep {
+        for flatten in [true, false] {
+            let name = if flatten {
+                name.clone()
+            } else {
+                format!("{name} (no-flatten)")
+            };
+            cases.push(Case {
+                name,
+                scene: scene.clone(),
+                flatten,
+            });
+        }
+    }
     if let Some(only) = &args.only {
-        cases.retain(|(name, _)| name.contains(only.as_str()));
+        cases.retain(|c| only.split(',').any(|o| c.name.contains(o)));
     }
     let integrator = Whitted {
         bounces: 5,
@@ -110,25 +154,32 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         args.runs,
         rayon::current_num_threads()
     );
-    println!("| scene | triangles | accelerator | build ms | render ms | tests/ray | nodes/ray | speedup vs none |");
-    println!("|---|---|---|---|---|---|---|---|");
-    for (name, scene) in &cases {
+    println!("| scene | triangles | accelerator | build ms | memory KB | render ms | tests/ray | nodes/ray | speedup vs none |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for Case {
+        name,
+        scene,
+        flatten,
+    } in &cases
+    {
+        let (scene, flatten) = (scene, *flatten);
         let tris = scene.summary().triangles;
         let mut rows: Vec<(AccelKind, Row)> = Vec::new();
         for &accel in ACCELS.iter().skip(1) {
             rows.push((
                 accel,
-                measure(scene, accel, &integrator, args.size, args.runs),
+                measure(scene, accel, flatten, &integrator, args.size, args.runs),
             ));
         }
-        let none = estimate_or_measure_none(scene, &integrator, args);
+        let none = estimate_or_measure_none(scene, flatten, &integrator, args);
         let none_ms = none.render_ms;
         rows.insert(0, (AccelKind::None, none));
         for (accel, r) in &rows {
             let mark = if r.estimated { "~" } else { "" };
             println!(
-                "| {name} | {tris} | {accel} | {:.1} | {mark}{:.1} | {mark}{:.2} | {:.2} | {mark}{:.1}x |",
+                "| {name} | {tris} | {accel} | {:.1} | {:.0} | {mark}{:.1} | {mark}{:.2} | {:.2} | {mark}{:.1}x |",
                 r.build_ms,
+                r.memory_kb,
                 r.render_ms,
                 r.tests_per_ray,
                 r.nodes_per_ray,
@@ -140,21 +191,24 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     Ok(())
 }
 
-fn measure(scene: &Scene, accel: AccelKind, integrator: &Whitted, size: u32, runs: usize) -> Row {
+fn measure(
+    scene: &Scene,
+    accel: AccelKind,
+    flatten: bool,
+    integrator: &Whitted,
+    size: u32,
+    runs: usize,
+) -> Row {
     let mut builds = Vec::new();
     let mut renders = Vec::new();
     let mut counters = Default::default();
+    let mut memory = 0;
     for _ in 0..runs.max(1) {
         let t = Instant::now();
-        let world = World::build(
-            scene,
-            BuildOptions {
-                accel,
-                flatten: true,
-            },
-        );
+        let world = World::build(scene, BuildOptions { accel, flatten });
         builds.push(t.elapsed().as_secs_f64() * 1e3);
-        let cam = CameraModel::new(&scene.camera);
+        memory = world.accel.memory_bytes();
+        let cam = CameraModel::new(&world.camera);
         let t = Instant::now();
         let (_, c) = render(&world, &cam, integrator, (size, size), PixelOffset::CENTER);
         renders.push(t.elapsed().as_secs_f64() * 1e3);
@@ -163,6 +217,7 @@ fn measure(scene: &Scene, accel: AccelKind, integrator: &Whitted, size: u32, run
     let rays = counters.rays_total().max(1) as f64;
     Row {
         build_ms: median(&mut builds),
+        memory_kb: memory as f64 / 1024.0,
         render_ms: median(&mut renders),
         tests_per_ray: counters.intersection_tests as f64 / rays,
         nodes_per_ray: counters.nodes_visited as f64 / rays,
@@ -172,11 +227,16 @@ fn measure(scene: &Scene, accel: AccelKind, integrator: &Whitted, size: u32, run
 
 /// Brute force costs (rays × primitives): measure it on a 16×16 image first
 /// and run the full size only when the extrapolation stays under the limit.
-fn estimate_or_measure_none(scene: &Scene, integrator: &Whitted, args: &BenchArgs) -> Row {
-    let small = measure(scene, AccelKind::None, integrator, 16, 1);
+fn estimate_or_measure_none(
+    scene: &Scene,
+    flatten: bool,
+    integrator: &Whitted,
+    args: &BenchArgs,
+) -> Row {
+    let small = measure(scene, AccelKind::None, flatten, integrator, 16, 1);
     let scale = (args.size as f64 / 16.0).powi(2);
     if small.render_ms * scale / 1e3 <= args.none_limit_s {
-        return measure(scene, AccelKind::None, integrator, args.size, 1);
+        return measure(scene, AccelKind::None, flatten, integrator, args.size, 1);
     }
     // Tests per ray are a property of brute force (every bounded primitive
     // plus the planes), so the small render's figure holds at full size.

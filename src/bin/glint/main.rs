@@ -4,6 +4,7 @@ use clap::{Args, Parser, Subcommand};
 use glint::accel::AccelKind;
 use glint::format::load_scene;
 use glint::job::Job;
+use glint::limits;
 use glint::material::TextureSpace;
 use glint::render::{Adaptive, Filter, Sampler, SamplerKind};
 use std::io::IsTerminal;
@@ -23,6 +24,8 @@ struct Cli {
 
 mod bench;
 mod bench_loop;
+mod deep;
+mod merge;
 mod raytree;
 mod structure;
 mod traverse;
@@ -49,7 +52,7 @@ enum Command {
         /// Skip brute force (and extrapolate it) when it would take longer than this many seconds.
         #[arg(long, default_value_t = 60.0)]
         none_limit: f64,
-        /// Only the cases whose name contains this text.
+        /// Only the cases whose name contains this text (or any of several, comma-separated).
         #[arg(long)]
         only: Option<String>,
     },
@@ -73,6 +76,8 @@ enum Command {
     Traverse(traverse::TraverseArgs),
     /// Draw a BVH's or an octree's boxes at one depth (or its leaves) over the rendered image.
     Structure(structure::StructureArgs),
+    /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
+    Merge(merge::MergeArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -103,10 +108,10 @@ struct RenderArgs {
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
     size: Vec<u32>,
-    /// Maximum number of reflection/refraction bounces.
+    /// Maximum number of reflection/refraction bounces (0 to 64).
     #[arg(long, default_value_t = 5)]
     bounces: u32,
-    /// Prune ray-tree branches contributing less than this.
+    /// Prune ray-tree branches contributing less than this (finite, >= 0).
     #[arg(long, default_value_t = 0.01)]
     weight: f32,
     /// Cast shadow rays.
@@ -118,13 +123,13 @@ struct RenderArgs {
     /// Light the back sides of surfaces.
     #[arg(long)]
     shade_back: bool,
-    /// Worker threads (default: all cores).
+    /// Worker threads, 1 to 1024 (default: all cores; more than 4 per core are clamped).
     #[arg(long)]
     threads: Option<usize>,
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: none, grid, grid:NxNxN, octree, bvh (= bvh-sah), bvh-median, bvh-midpoint.
+    /// Accelerator: none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
     #[arg(long, default_value = "bvh")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
@@ -168,6 +173,15 @@ struct RenderArgs {
     samples_image: Option<PathBuf>,
     /// Also write per-pixel cost: intersection tests (left) and nodes or cells visited (right), as heat maps with scale bars and totals.
     #[arg(long, value_name = "FILE")]
+    /// Render only piece I of N (0-based horizontal bands of the frame) and write it as an EXR with that data window, for `glint merge`.
+    #[arg(long, value_name = "I/N", conflicts_with_all = ["tile_from_env", "crop"])]
+    tile: Option<String>,
+    /// Like --tile, with I read from an environment variable: SLURM_ARRAY_TASK_ID/N, JOB_COMPLETION_INDEX/N (Kubernetes), ...
+    #[arg(long, value_name = "VAR/N", conflicts_with = "crop")]
+    tile_from_env: Option<String>,
+    /// Render only the pixels X0..X1 x Y0..Y1 (half-open; x right, y down from the top) as an EXR piece.
+    #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"])]
+    crop: Option<Vec<u32>>,
     cost_image: Option<PathBuf>,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
@@ -214,10 +228,14 @@ fn main() -> ExitCode {
 }
 
 fn real_main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return clap_error(e),
+    };
     match cli.command {
         Command::Render(a) => render(*a),
         Command::Info { scene } => info(scene),
+        Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
@@ -251,18 +269,20 @@ fn real_main() -> ExitCode {
             runs,
             none_limit,
             only,
-        } => match bench::run(&bench::BenchArgs {
-            scenes,
-            course,
-            meshes: mesh,
-            size,
-            runs,
-            none_limit_s: none_limit,
-            only,
+        } => match check_bench(size, runs, none_limit).and_then(|()| {
+            bench::run(&bench::BenchArgs {
+                scenes,
+                course,
+                meshes: mesh,
+                size,
+                runs,
+                none_limit_s: none_limit,
+                only,
+            })
         }) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
-                eprintln!("glint: {e}");
+                eprintln!("glint: {}", limits::bounded_message(&e));
                 ExitCode::from(2)
             }
         },
@@ -270,14 +290,15 @@ fn real_main() -> ExitCode {
 }
 
 fn render(a: RenderArgs) -> ExitCode {
-    let mut job = Job::new(a.scene, a.size[0], a.size[1]);
+    let mut job = Job::new(a.scene.clone(), a.size[0], a.size[1]);
+    if let Err(msg) = check_numbers(&a, &mut job) {
+        eprintln!("glint: {}", limits::bounded_message(&msg));
+        return ExitCode::from(2);
+    }
     job.output = Some(a.output);
-    job.integrator.bounces = a.bounces;
-    job.integrator.weight_cutoff = a.weight;
     job.integrator.shadows = a.shadows || a.transparent_shadows;
     job.integrator.transparent_shadows = a.transparent_shadows;
     job.integrator.shade_back = a.shade_back;
-    job.threads = a.threads;
     job.build.accel = a.accel;
     job.integrator.texture_space = match a.texture_space {
         Space::World => TextureSpace::World,
@@ -289,9 +310,13 @@ fn render(a: RenderArgs) -> ExitCode {
     job.cancel = Some(glint::job::interrupt_flag());
     job.normals = a.normals;
     if let Some(d) = a.depth {
-        let (Ok(t0), Ok(t1)) = (d[0].parse(), d[1].parse()) else {
-            eprintln!("glint: --depth expects two numbers and a file, got {d:?}");
-            return ExitCode::from(2);
+        let t = |s: &str| limits::parse_finite("--depth", s, f32::MIN, f32::MAX);
+        let (t0, t1) = match (t(&d[0]), t(&d[1])) {
+            (Ok(t0), Ok(t1)) => (t0, t1),
+            (Err(msg), _) | (_, Err(msg)) => {
+                eprintln!("glint: {msg} (--depth T0 T1 FILE)");
+                return ExitCode::from(2);
+            }
         };
         job.depth = Some((t0, t1, PathBuf::from(&d[2])));
     }
@@ -323,6 +348,27 @@ fn render(a: RenderArgs) -> ExitCode {
     };
     job.ao_image = a.integrator == IntegratorName::Ao;
     job.cost_image = a.cost_image;
+    let size = (job.width, job.height);
+    let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
+        (Some(t), _, _) => Some(
+            glint::piece::parse_index(t)
+                .and_then(|(i, n)| glint::piece::band(i, n, size, glint::render::TILE_SIZE)),
+        ),
+        (_, Some(t), _) => Some(
+            glint::piece::index_from_env(t, |v| std::env::var(v).ok())
+                .and_then(|(i, n)| glint::piece::band(i, n, size, glint::render::TILE_SIZE)),
+        ),
+        (_, _, Some(c)) => Some(glint::piece::crop([c[0], c[1], c[2], c[3]], size)),
+        _ => None,
+    };
+    match piece {
+        Some(Err(e)) => {
+            eprintln!("glint: {e}");
+            return ExitCode::from(2);
+        }
+        Some(Ok(p)) => job.piece = Some(p),
+        None => {}
+    }
     for (what, v, slot) in [
         ("--render-samples", a.render_samples, &mut job.samples_view),
         ("--render-filter", a.render_filter, &mut job.filter_view),
@@ -345,7 +391,7 @@ fn render(a: RenderArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("glint: {e}");
+            eprintln!("glint: {}", limits::bounded_message(&e.to_string()));
             ExitCode::from(e.exit_code() as u8)
         }
     }
@@ -355,12 +401,13 @@ fn info(path: PathBuf) -> ExitCode {
     let scene = match load_scene(&path) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("glint: {}", e.render());
+            eprintln!("glint: {}", limits::bounded_message(&e.render()));
             return ExitCode::from(2);
         }
     };
     let s = scene.summary();
-    let world = glint::world::World::build(&scene, Default::default());
+    // World space: the bounds printed are the scene file's coordinates.
+    let world = glint::world::World::build_world_space(&scene, Default::default());
     let b = world.bounds();
     println!("scene       {}", path.display());
     println!("camera      {}", camera_name(&scene.camera));
@@ -385,9 +432,68 @@ fn info(path: PathBuf) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// Prints a command-line error as clap would, but never more than a few
+/// kilobytes: clap quotes a bad value whole, and one argument may be 128 kB.
+fn clap_error(e: clap::Error) -> ExitCode {
+    let text = e.render().to_string();
+    if !e.use_stderr() || text.len() <= 8192 {
+        e.exit()
+    }
+    eprint!("{}", limits::bounded_message(&text));
+    ExitCode::from(2)
+}
+
+/// `glint bench`'s numbers: a size the frame check allows, 1 to 1000 runs,
+/// and a finite time limit.
+fn check_bench(size: u32, runs: usize, none_limit: f64) -> Result<(), String> {
+    limits::int_in("--size", size, 1, 16_384)?;
+    limits::int_in("--runs", runs, 1, 1000)?;
+    if !(none_limit.is_finite() && none_limit >= 0.0) {
+        return Err(format!(
+            "--none-limit: {none_limit} is not a finite number of seconds >= 0"
+        ));
+    }
+    Ok(())
+}
+
+/// The numeric render flags, in their documented ranges ([`limits`]):
+/// `--weight nan` rendered before issue 15, `--threads 100000` hung.
+fn check_numbers(a: &RenderArgs, job: &mut Job) -> Result<(), String> {
+    job.integrator.bounces = limits::int_in("--bounces", a.bounces, 0, limits::MAX_BOUNCES)?;
+    job.integrator.weight_cutoff = limits::finite_in("--weight", a.weight, 0.0, f32::MAX)?;
+    if let Some(n) = a.threads {
+        let (n, note) = limits::threads("--threads", n, limits::cores())?;
+        if let Some(note) = note {
+            eprintln!("glint: {note}");
+        }
+        job.threads = Some(n);
+    }
+    Ok(())
+}
+
 fn camera_name(c: &glint::scene::Camera) -> &'static str {
     match c {
         glint::scene::Camera::Orthographic { .. } => "orthographic",
         glint::scene::Camera::Perspective { .. } => "perspective",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// `glint render --help` names every accelerator `--accel` accepts.
+    #[test]
+    fn render_help_lists_every_accelerator() {
+        let mut cmd = Cli::command();
+        let help = cmd
+            .find_subcommand_mut("render")
+            .expect("render subcommand")
+            .render_long_help()
+            .to_string();
+        for name in AccelKind::NAMES {
+            assert!(help.contains(name), "{name} is not in render --help");
+        }
     }
 }

@@ -2,8 +2,8 @@
 
 use clap::Args;
 use glint::accel::AccelKind;
-use glint::format::load_scene;
 use glint::integrator::Whitted;
+use glint::limits;
 use glint::render::{CameraModel, PixelOffset};
 use glint::viz::raytree;
 use glint::world::{BuildOptions, World};
@@ -50,7 +50,7 @@ pub fn run(a: RaytreeArgs) -> ExitCode {
     match run_inner(a) {
         Ok(()) => ExitCode::SUCCESS,
         Err((code, msg)) => {
-            eprintln!("glint: {msg}");
+            eprintln!("glint: {}", limits::bounded_message(&msg));
             ExitCode::from(code)
         }
     }
@@ -75,18 +75,23 @@ fn run_inner(a: RaytreeArgs) -> Result<(), (u8, String)> {
         .unwrap_or_default();
     let image = !matches!(ext.as_str(), "json" | "obj" | "ply");
     if image {
-        glint::output::check_path(&a.output)
+        glint::output::check_image(&a.output, w, h)
             .map_err(|e| (2, format!("{e} (or .json, .obj, .ply for the tree itself)")))?;
     }
-    let scene = load_scene(&a.scene).map_err(|e| (2, e.render()))?;
-    let world = World::build(
+    // Issue 15: the numbers' ranges, and never overwrite an input.
+    limits::int_in("--bounces", a.bounces, 0, limits::MAX_BOUNCES).map_err(|e| (2, e))?;
+    limits::finite_in("--weight", a.weight, 0.0, f32::MAX).map_err(|e| (2, e))?;
+    let scene = glint::job::load_scene_for(&a.scene, &a.output, (w, h))
+        .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
+    // World space: the exported rays are in the scene's coordinates.
+    let world = World::build_world_space(
         &scene,
         BuildOptions {
             accel: a.accel,
             flatten: true,
         },
     );
-    let camera = CameraModel::new(&scene.camera);
+    let camera = CameraModel::new(&world.camera);
     let integrator = Whitted {
         bounces: a.bounces,
         weight_cutoff: a.weight,
@@ -108,15 +113,15 @@ fn run_inner(a: RaytreeArgs) -> Result<(), (u8, String)> {
         .iter()
         .map(|(k, n)| format!("{n} {k}"))
         .collect();
-    let io = |e: std::io::Error| (1, format!("{}: {e}", a.output.display()));
+    let io = |e: glint::output::OutputError| (1, e.to_string());
     match ext.as_str() {
         "json" => {
             let text =
                 serde_json::to_string_pretty(&tree.to_json()).map_err(|e| (1, e.to_string()))?;
-            std::fs::write(&a.output, text + "\n").map_err(io)?;
+            glint::output::write_file(&a.output, (text + "\n").as_bytes()).map_err(io)?;
         }
-        "obj" => std::fs::write(&a.output, tree.to_obj()).map_err(io)?,
-        "ply" => std::fs::write(&a.output, tree.to_ply()).map_err(io)?,
+        "obj" => glint::output::write_file(&a.output, tree.to_obj().as_bytes()).map_err(io)?,
+        "ply" => glint::output::write_file(&a.output, tree.to_ply().as_bytes()).map_err(io)?,
         _ => {
             let canvas = raytree::overlay(&world, &camera, &integrator, (w, h), &tree);
             glint::output::write_rgb(&a.output, w, h, &canvas.pixels)

@@ -3,7 +3,6 @@
 
 use clap::Args;
 use glint::accel::AccelKind;
-use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::render::{render, CameraModel, PixelOffset};
 use glint::viz::draw::Canvas;
@@ -17,7 +16,7 @@ use std::process::ExitCode;
 pub struct StructureArgs {
     /// Scene file (MIT 6.837 format) or a bare .obj mesh.
     scene: PathBuf,
-    /// Accelerator: octree, bvh, bvh-median, bvh-midpoint.
+    /// Accelerator: octree, octree-inner, bvh, bvh-median, bvh-midpoint.
     #[arg(long, default_value = "bvh")]
     accel: AccelKind,
     /// Draw the nodes at this depth (the root is 0); default: every leaf.
@@ -34,7 +33,7 @@ pub struct StructureArgs {
 /// Runs `glint structure`.
 pub fn run(a: StructureArgs) -> ExitCode {
     let fail = |code: u8, msg: String| {
-        eprintln!("glint: {msg}");
+        eprintln!("glint: {}", glint::limits::bounded_message(&msg));
         ExitCode::from(code)
     };
     let (w, h) = (a.size[0], a.size[1]);
@@ -53,22 +52,30 @@ pub fn run(a: StructureArgs) -> ExitCode {
             return fail(2, format!("{e} (or .obj)"));
         }
     }
-    let scene = match load_scene(&a.scene) {
+    // Never overwrites the scene or a mesh it names (issue 15).
+    let scene = match glint::job::load_scene_for(&a.scene, &a.output, (w, h)) {
         Ok(s) => s,
-        Err(e) => return fail(2, e.render()),
+        Err(e) => return fail(e.exit_code() as u8, e.to_string()),
     };
-    let world = World::build(&scene, BuildOptions::default());
+    // World space: the boxes drawn (and exported) are in the scene's coordinates.
+    let world = World::build_world_space(&scene, BuildOptions::default());
     let boxes = match Structure::build(&world, a.accel) {
         Some(Structure::Bvh(b)) => glint::viz::structure::bvh_boxes(&b),
         Some(Structure::Octree(o)) => glint::viz::structure::octree_boxes(&o),
-        _ => return fail(2, format!("--accel {}: choose octree or a bvh", a.accel)),
+        _ => {
+            return fail(
+                2,
+                format!("--accel {}: choose octree, octree-inner or a bvh", a.accel),
+            )
+        }
     };
     let segments = glint::viz::structure::segments(&boxes, a.depth);
     let deepest = boxes.iter().map(|b| b.1).max().unwrap_or(0);
     let written = if obj {
-        std::fs::write(&a.output, traversal::to_obj(&segments)).map_err(|e| e.to_string())
+        glint::output::write_file(&a.output, traversal::to_obj(&segments).as_bytes())
+            .map_err(|e| e.to_string())
     } else {
-        let camera = CameraModel::new(&scene.camera);
+        let camera = CameraModel::new(&world.camera);
         let shading = Whitted {
             shadows: true,
             ..Whitted::default()

@@ -3,7 +3,6 @@
 
 use clap::Args;
 use glint::accel::AccelKind;
-use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::render::{render, screen_point, CameraModel, PixelOffset};
 use glint::viz::draw::Canvas;
@@ -39,7 +38,7 @@ pub fn run(a: TraverseArgs) -> ExitCode {
     match run_inner(a) {
         Ok(()) => ExitCode::SUCCESS,
         Err((code, msg)) => {
-            eprintln!("glint: {msg}");
+            eprintln!("glint: {}", glint::limits::bounded_message(&msg));
             ExitCode::from(code)
         }
     }
@@ -71,12 +70,18 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
     if !matches!(ext.as_str(), "obj" | "json") {
         glint::output::check_path(&a.output).map_err(|e| (2, format!("{e} (or .obj, .json)")))?;
     }
-    let scene = load_scene(&a.scene).map_err(|e| (2, e.render()))?;
-    let world = World::build(&scene, BuildOptions::default());
-    let camera = CameraModel::new(&scene.camera);
+    // Never overwrites the scene or a mesh it names (issue 15).
+    let scene = glint::job::load_scene_for(&a.scene, &a.output, (w, h))
+        .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
+    // World space: the exported cells and boxes are in the scene's coordinates.
+    let world = World::build_world_space(&scene, BuildOptions::default());
+    let camera = CameraModel::new(&world.camera);
     let structure = Structure::build(&world, a.accel).ok_or((
         2,
-        "--accel none walks no structure: choose grid, octree or a bvh".to_string(),
+        format!(
+            "--accel {}: no walk to record; choose grid, octree, octree-inner or a bvh",
+            a.accel
+        ),
     ))?;
     let bvh = matches!(structure, Structure::Bvh(_));
     let mut segments = Vec::new();
@@ -99,15 +104,16 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
             })).collect::<Vec<_>>(),
         }));
     }
-    let io = |e: std::io::Error| (1, format!("{}: {e}", a.output.display()));
+    let io = |e: glint::output::OutputError| (1, e.to_string());
     match ext.as_str() {
-        "obj" => std::fs::write(&a.output, traversal::to_obj(&segments)).map_err(io)?,
+        "obj" => glint::output::write_file(&a.output, traversal::to_obj(&segments).as_bytes())
+            .map_err(io)?,
         "json" => {
             let text = serde_json::to_string_pretty(
                 &serde_json::json!({ "accel": a.accel.to_string(), "rays": json }),
             )
             .map_err(|e| (1, e.to_string()))?;
-            std::fs::write(&a.output, text + "\n").map_err(io)?;
+            glint::output::write_file(&a.output, (text + "\n").as_bytes()).map_err(io)?;
         }
         _ => {
             let shading = Whitted {

@@ -5,6 +5,7 @@
 use super::lexer::{tokenize, Kind, Token};
 use super::Result;
 use crate::format::diagnostic::{quote, ParseError};
+use crate::limits::MAX_COLOR;
 use crate::math::Vec3;
 use crate::scene::Mesh;
 use std::collections::HashMap;
@@ -121,6 +122,23 @@ impl<'a> Parser<'a> {
         let (y, ty) = self.number()?;
         let (z, tz) = self.number()?;
         Ok((Vec3::new(x, y, z), [tx, ty, tz]))
+    }
+
+    /// Reads three numbers each within `[0, max]` (a colour, or attenuation
+    /// coefficients); `what` names one component for errors.
+    pub fn vec3_within(&mut self, max: f32, what: &str) -> Result<Vec3> {
+        let (v, toks) = self.vec3()?;
+        for (x, tok) in v.to_array().into_iter().zip(toks) {
+            if !(0.0..=max).contains(&x) {
+                return Err(self.error(Some(tok), format!("{what} from 0 to {max}")));
+            }
+        }
+        Ok(v)
+    }
+
+    /// Reads a colour: components from 0 to [`MAX_COLOR`].
+    pub fn color(&mut self) -> Result<Vec3> {
+        self.vec3_within(MAX_COLOR, "a colour component")
     }
 
     /// Reads an integer (optionally signed, no fraction or exponent).

@@ -4,6 +4,7 @@
 use super::cursor::{closing, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
+use crate::limits::MAX_OCTAVES;
 use crate::math::Mat4;
 use crate::scene::{Material, Phong, TextureKind};
 
@@ -68,10 +69,12 @@ impl<'a> Parser<'a> {
         ];
         self.fields(kw, &names, |p, f| {
             match f.text {
-                "diffuseColor" => m.diffuse = p.vec3()?.0,
-                "specularColor" => m.specular = p.vec3()?.0,
-                "reflectiveColor" => m.reflective = p.vec3()?.0,
-                "transparentColor" => m.transparent = p.vec3()?.0,
+                "diffuseColor" => m.diffuse = p.color()?,
+                "specularColor" => m.specular = p.color()?,
+                // At most 1: a ray's weight never grows down the tree, so
+                // 64 bounces cannot overflow a pixel.
+                "reflectiveColor" => m.reflective = p.vec3_within(1.0, "a reflectivity")?,
+                "transparentColor" => m.transparent = p.vec3_within(1.0, "a transparency")?,
                 // A negative exponent makes the highlight infinite where N·H = 0.
                 "exponent" => m.exponent = p.number_where(|v| v >= 0.0, "an exponent >= 0")?,
                 "glossiness" => {
@@ -190,10 +193,19 @@ impl<'a> Parser<'a> {
         Err(self.error(Some(tok), expected))
     }
 
-    /// A texture's octave count.
+    /// A texture's octave count, 0 to [`MAX_OCTAVES`]: each octave is one
+    /// more noise lookup per shading point, so 2e9 of them hang a render.
     fn octaves(&mut self) -> Result<u32> {
         let (n, tok) = self.non_negative("an octave count")?;
-        u32::try_from(n).map_err(|_| self.error(Some(tok), "an octave count that fits 32 bits"))
+        u32::try_from(n)
+            .ok()
+            .filter(|&n| n <= MAX_OCTAVES)
+            .ok_or_else(|| {
+                self.error(
+                    Some(tok),
+                    format!("an octave count from 0 to {MAX_OCTAVES}"),
+                )
+            })
     }
 
     /// A number satisfying `ok`, else an error at it expecting `what`.

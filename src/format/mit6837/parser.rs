@@ -8,10 +8,15 @@ use crate::math::Vec3;
 use crate::scene::{
     AmbientOcclusion, AreaShape, Background, Camera, EffectSamples, Effects, Lens, Light, Scene,
 };
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Parses a whole scene; `file` is used in messages and to resolve meshes.
 pub(crate) fn parse(src: &str, file: &Path) -> Result<Scene> {
+    parse_with_meshes(src, file).map(|(scene, _)| scene)
+}
+
+/// [`parse`], and the paths of the mesh files the scene read.
+pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<PathBuf>)> {
     let mut p = Parser::new(src, file);
     let mut camera = None;
     let mut lights: Option<Vec<Light>> = None;
@@ -79,14 +84,17 @@ pub(crate) fn parse(src: &str, file: &Path) -> Result<Scene> {
     if lights.is_empty() {
         background.ambient = Vec3::ONE;
     }
-    Ok(Scene {
+    let mut meshes: Vec<PathBuf> = p.meshes.into_keys().collect();
+    meshes.sort();
+    let scene = Scene {
         camera,
         lights,
         background,
         materials: materials.unwrap_or_default(),
         root,
         effects,
-    })
+    };
+    Ok((scene, meshes))
 }
 
 /// Largest ray count a scene may ask for per effect: far more than any
@@ -256,17 +264,17 @@ impl<'a> Parser<'a> {
         };
         let (mut place, mut color, mut attenuation) = (None, None, None);
         let close = self.fields(kw, names, |p, f| {
-            let v = Some(p.vec3()?);
             match f.text {
-                "color" => color = v,
-                "attenuation" => attenuation = v,
-                _ => place = v,
+                "color" => color = Some(p.color()?),
+                "attenuation" => {
+                    attenuation = Some(p.vec3_within(f32::MAX, "an attenuation coefficient")?)
+                }
+                _ => place = Some(p.vec3()?),
             }
             Ok(())
         })?;
         let (place, place_toks) = self.require(place, close, names[0], kw)?;
-        let color = self.require(color, close, "color", kw)?.0;
-        let attenuation = attenuation.map(|a| a.0);
+        let color = self.require(color, close, "color", kw)?;
         // A directional light without a direction would light nothing.
         if directional && place.as_dvec3().length_squared() == 0.0 {
             return Err(self.error_found(
@@ -429,7 +437,7 @@ impl<'a> Parser<'a> {
     fn background(&mut self, kw: Token<'a>) -> Result<Background> {
         let mut bg = Background::default();
         self.fields(kw, &["color", "ambientLight"], |p, f| {
-            let v = p.vec3()?.0;
+            let v = p.color()?;
             match f.text {
                 "color" => bg.color = v,
                 _ => bg.ambient = v,

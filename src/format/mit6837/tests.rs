@@ -525,3 +525,33 @@ fn distribution_blocks() {
     let plain = scene(&format!("{CAMERA}Group {{ numObjects 0 }}"));
     assert_eq!(plain.effects, crate::scene::Effects::default());
 }
+
+/// Issue 15: `octaves 2000000000` hung a tiny render; now every count has a
+/// range, checked at the number.
+#[test]
+fn octaves_beyond_the_cap_are_refused_at_the_number() {
+    let src = |n: &str| {
+        format!(
+            "{CAMERA}Materials {{ numMaterials 3 Material {{}} Material {{}}\n\
+             Noise {{ materialIndex 1 materialIndex 0 octaves {n} }} }}\nGroup {{ numObjects 0 }}"
+        )
+    };
+    assert!(parse(&src("32"), Path::new("t.txt")).is_ok());
+    for n in ["33", "2000000000", "99999999999999"] {
+        let e = error(&src(n));
+        assert_eq!((e.line, e.col), (3, 49), "{n}");
+        assert_eq!(e.expected, "an octave count from 0 to 32");
+    }
+}
+
+/// Issue 15: a UTF-8 byte-order mark made the first keyword unknown, with the
+/// mark invisible in the message.
+#[test]
+fn a_byte_order_mark_is_accepted_and_elsewhere_shown_escaped() {
+    let bytes = format!("\u{feff}{CAMERA}Group {{ numObjects 0 }}");
+    let text = crate::format::diagnostic_decode_for_tests(bytes.as_bytes());
+    assert!(parse(text, Path::new("t.txt")).is_ok());
+    let e = error(&format!("{CAMERA}\u{200b}Group {{ numObjects 0 }}"));
+    assert_eq!(e.found, "'\\u{200b}Group'");
+    assert!(e.render().contains("2 | \\u{200b}Group"), "{}", e.render());
+}

@@ -1,0 +1,152 @@
+use super::*;
+use crate::accel::testutil::{assert_agrees, prim, ray, soup, Rng};
+use crate::accel::Brute;
+use crate::math::Vec3;
+use crate::shape::{Shape, Sphere, Transformed, Triangle};
+
+fn all(prims: &[Primitive]) -> Vec<u32> {
+    (0..prims.len() as u32).collect()
+}
+
+/// Groups of `chunk` consecutive primitives, grouped again in fours.
+fn chunked(n: u32, chunk: u32) -> SceneTree {
+    let shapes: Vec<SceneTree> = (0..n)
+        .step_by(chunk as usize)
+        .map(|s| SceneTree::Shape(s..(s + chunk).min(n)))
+        .collect();
+    SceneTree::Group(
+        shapes
+            .chunks(4)
+            .map(|c| SceneTree::Group(c.to_vec()))
+            .collect(),
+    )
+}
+
+#[test]
+fn agrees_with_brute_force() {
+    let prims = soup(31, 800);
+    for chunk in [1, 7, 100, 2000] {
+        let h = HierarchyBvh::new(&prims, all(&prims), &chunked(prims.len() as u32, chunk));
+        assert_agrees(&h, &prims, 2000);
+    }
+}
+
+#[test]
+fn wide_groups_are_split_and_single_children_skipped() {
+    let prims = soup(32, 200);
+    let n = prims.len() as u32;
+    let flat = SceneTree::Group((0..n).map(|i| SceneTree::Shape(i..i + 1)).collect());
+    let wrapped = SceneTree::Group(vec![SceneTree::Group(vec![flat])]);
+    let h = HierarchyBvh::new(&prims, all(&prims), &wrapped);
+    for node in &h.nodes {
+        if let Kind::Inner { count, .. } = node.kind {
+            assert!((2..=MAX_CHILDREN as u32).contains(&count));
+        }
+    }
+    assert_eq!(h.ids.len(), prims.len());
+    assert_agrees(&h, &prims, 2000);
+}
+
+#[test]
+fn ids_outside_the_tree_are_kept_and_others_left_out() {
+    let prims = soup(33, 100);
+    let n = prims.len() as u32;
+    // The tree mentions the first half only; the ids skip every tenth.
+    let ids: Vec<u32> = (0..n).filter(|i| i % 10 != 0).collect();
+    let h = HierarchyBvh::new(&prims, ids.clone(), &chunked(n / 2, 5));
+    let mut got = h.ids.clone();
+    got.sort_unstable();
+    assert_eq!(got, ids);
+    let brute = Brute::new(&prims, ids);
+    let mut r = Rng::new(3);
+    for _ in 0..2000 {
+        let q = ray(&mut r);
+        let mut c = Counters::default();
+        assert_eq!(
+            brute.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c),
+            h.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c)
+        );
+    }
+}
+
+/// Unflattened: wrappers under one transform node are tested in its space,
+/// the ray carried once per node visit, with bit-identical hits.
+#[test]
+fn a_transform_node_carries_the_ray_once() {
+    let m = Mat4::from_translation(Vec3::new(0.5, -1.0, 2.0))
+        * Mat4::from_rotation_y(0.7)
+        * Mat4::from_scale(Vec3::new(1.0, 2.0, 0.5));
+    let mut r = Rng::new(34);
+    let object: Vec<Shape> = (0..300)
+        .map(|i| {
+            let a = r.v(-4.0, 4.0);
+            if i % 3 == 0 {
+                Shape::Sphere(Sphere {
+                    center: a,
+                    radius: 0.3,
+                })
+            } else {
+                Shape::Triangle(Triangle::new(a, a + r.v(-1.0, 1.0), a + r.v(-1.0, 1.0)))
+            }
+        })
+        .collect();
+    let prims: Vec<Primitive> = object
+        .into_iter()
+        .map(|s| {
+            prim(Shape::Transformed(Box::new(
+                Transformed::new(s, m).unwrap(),
+            )))
+        })
+        .collect();
+    let n = prims.len() as u32;
+    let tree = SceneTree::Group(vec![SceneTree::Transform {
+        to_world: m,
+        child: Box::new(SceneTree::Group(vec![
+            SceneTree::Shape(0..n / 2),
+            SceneTree::Shape(n / 2..n),
+        ])),
+    }]);
+    let h = HierarchyBvh::new(&prims, all(&prims), &tree);
+    assert_eq!(h.spaces(), 1);
+    assert!(matches!(
+        h.nodes[0].kind,
+        Kind::Inner {
+            space: 0,
+            count: 2,
+            ..
+        }
+    ));
+    let brute = Brute::new(&prims, all(&prims));
+    let mut hits = 0;
+    for _ in 0..3000 {
+        let q = ray(&mut r);
+        let mut c = Counters::default();
+        let want = brute.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c);
+        assert_eq!(want, h.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c));
+        assert_eq!(
+            brute.occluded(&prims, &q, 0.1, 5.0, &mut c),
+            h.occluded(&prims, &q, 0.1, 5.0, &mut c)
+        );
+        hits += want.is_some() as u32;
+    }
+    assert!(hits > 300, "{hits}");
+    // The same wrappers under a different matrix in the tree are tested in
+    // world space (each wrapper carries the ray itself): still exact.
+    let other = SceneTree::Transform {
+        to_world: Mat4::IDENTITY,
+        child: Box::new(SceneTree::Shape(0..n)),
+    };
+    let h = HierarchyBvh::new(&prims, all(&prims), &other);
+    assert_eq!(h.spaces(), 0);
+    assert_agrees(&h, &prims, 1000);
+}
+
+#[test]
+fn empty_tree_and_no_ids() {
+    let h = HierarchyBvh::new(&[], vec![], &SceneTree::Group(vec![]));
+    assert_eq!(h.node_count(), 0);
+    let q = Ray::new(Vec3::ZERO, Vec3::X);
+    assert!(h
+        .intersect(&[], &q, 0.0, f32::INFINITY, &mut Counters::default())
+        .is_none());
+}

@@ -1,0 +1,383 @@
+//! Nested grids: a coarse uniform grid whose crowded cells hold a finer grid
+//! over the cell's (padded) box, the lecture's other adaptive grid beside the
+//! octree.
+//!
+//! Every level is an ordinary [`Lattice`] filled by the uniform grid's own
+//! code (`grid::build::fill`) and walked by the same [`CellWalk`]: a cell
+//! that holds a finer grid is walked by a second 3DDDA over the part of the
+//! ray inside the cell, `[t_enter, t_exit]`, before the coarse walk moves on.
+//!
+//! Resolutions: the coarse grid has `∛N` cells along its longest axis (a
+//! third of the uniform grid's `3·∛N`); a cell holding more than `threshold`
+//! primitives gets `2·∛n` cells along its longest axis for its `n`, and so
+//! on down to `depth` levels below the coarse one. A crowded cell's own list
+//! is dropped: its finer grid holds every one of its primitives.
+//!
+//! Exactness is the uniform grid's rule at every level: the closest hit is
+//! kept across cells and levels (one mailbox for the whole ray), and the walk
+//! stops once it lies before the exit of the cell just finished, whatever
+//! its level. A finer cell's exit is never after its coarse cell's, so
+//! stopping inside a finer grid is as safe as stopping in the coarse one.
+
+use super::grid::build::{fill, resolution_with};
+use super::grid::{CellWalk, Face, Lattice};
+use super::mailbox::Mailbox;
+use super::overlap::{margin, padded};
+use super::{Aggregate, PrimHit};
+use crate::math::{Aabb, Ray};
+use crate::primitive::Primitive;
+use crate::stats::Counters;
+
+/// Cells per `∛N` along the longest axis of the coarse grid.
+const COARSE_DENSITY: f32 = 1.0;
+/// Cells per `∛n` along the longest axis of a finer grid.
+const FINE_DENSITY: f32 = 2.0;
+
+/// One level: a lattice, its cells' primitives and the finer grids of its
+/// crowded cells.
+struct Level {
+    lattice: Lattice,
+    /// CSR cells: cell `k` holds `items[offsets[k]..offsets[k + 1]]`.
+    offsets: Vec<u32>,
+    items: Vec<u32>,
+    /// Per cell: 0, or 1 + the index of its finer grid in `children`.
+    child: Vec<u32>,
+    children: Vec<Level>,
+}
+
+/// A coarse grid with finer grids in its crowded cells.
+pub struct NestedGrid {
+    top: Level,
+    /// Unpadded union of the primitives' boxes.
+    bounds: Aabb,
+    threshold: u32,
+    depth: u32,
+}
+
+impl NestedGrid {
+    /// A nested grid over the primitives `ids` of `prims`: cells holding more
+    /// than `threshold` primitives get a finer grid, at most `depth` levels
+    /// below the coarse one.
+    pub fn new(prims: &[Primitive], ids: Vec<u32>, threshold: u32, depth: u32) -> Self {
+        let bounds = ids
+            .iter()
+            .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+        let m = margin(&bounds);
+        let region = if bounds.is_empty() {
+            bounds
+        } else {
+            padded(&bounds, m)
+        };
+        let b = Builder {
+            prims,
+            margin: m,
+            threshold: threshold.max(1) as usize,
+        };
+        let top = b.level(region, &ids, COARSE_DENSITY, depth);
+        Self {
+            top,
+            bounds,
+            threshold,
+            depth,
+        }
+    }
+
+    /// Finer grids at every level below the coarse one.
+    pub fn subgrids(&self) -> usize {
+        fn count(l: &Level) -> usize {
+            l.children.len() + l.children.iter().map(count).sum::<usize>()
+        }
+        count(&self.top)
+    }
+
+    /// Cells of every level.
+    pub fn cells(&self) -> usize {
+        fn count(l: &Level) -> usize {
+            l.lattice.cells() + l.children.iter().map(count).sum::<usize>()
+        }
+        count(&self.top)
+    }
+
+    /// The coarse grid's cells per axis.
+    pub fn coarse_res(&self) -> [u32; 3] {
+        self.top.lattice.res
+    }
+
+    /// Calls `visit(items, t_exit)` for every leaf cell (one without a finer
+    /// grid) the ray crosses within `[t0, t1]`, front to back over all
+    /// levels, until `visit` returns true; returns whether it did. `seen`
+    /// is told every cell walked, at every level (for the traversal views).
+    fn walk(
+        level: &Level,
+        ray: &Ray,
+        t0: f32,
+        t1: f32,
+        c: &mut Counters,
+        visit: &mut impl FnMut(&[u32], f32, &mut Counters) -> bool,
+        seen: &mut impl FnMut(&CellVisit),
+    ) -> bool {
+        for cell in CellWalk::new(&level.lattice, ray, t0, t1) {
+            c.nodes_visited += 1;
+            let k = level.lattice.linear(cell.index);
+            seen(&CellVisit {
+                bounds: level.lattice.cell_bounds(cell.index),
+                entered: cell.entered,
+                finer: level.child[k] != 0,
+            });
+            let stop = match level.child[k] {
+                0 => {
+                    let items =
+                        &level.items[level.offsets[k] as usize..level.offsets[k + 1] as usize];
+                    visit(items, cell.t_exit, c)
+                }
+                j => Self::walk(
+                    &level.children[j as usize - 1],
+                    ray,
+                    cell.t_enter,
+                    cell.t_exit,
+                    c,
+                    visit,
+                    seen,
+                ),
+            };
+            if stop {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The closest hit, calling `visit` with every cell the search walks at
+    /// every level, in order: the renderer's search itself
+    /// ([`Aggregate::intersect`] passes a visitor that does nothing), which
+    /// the traversal views record.
+    pub fn intersect_visiting(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+        mut visit: impl FnMut(&CellVisit),
+    ) -> Option<PrimHit> {
+        let mut best: Option<PrimHit> = None;
+        let mut t_best = tmax;
+        let mut seen = Mailbox::new();
+        let test = &mut |items: &[u32], t_exit: f32, c: &mut Counters| {
+            for &id in items {
+                if !seen.first_visit(id) {
+                    continue;
+                }
+                c.intersection_tests += 1;
+                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
+                    t_best = t;
+                    best = Some(PrimHit { t, prim: id });
+                }
+            }
+            // Accepted only now: nothing in a later cell can be closer.
+            t_best <= t_exit
+        };
+        Self::walk(&self.top, ray, tmin, tmax, c, test, &mut visit);
+        best
+    }
+}
+
+/// One cell of a nested grid's walk, at any level.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellVisit {
+    /// The cell's box.
+    pub bounds: Aabb,
+    /// The face it was entered through (`None` where the walk started).
+    pub entered: Option<Face>,
+    /// Whether the cell holds a finer grid (walked next) rather than a list.
+    pub finer: bool,
+}
+
+struct Builder<'a> {
+    prims: &'a [Primitive],
+    margin: f32,
+    threshold: usize,
+}
+
+impl Builder<'_> {
+    /// A grid over `region` holding `ids`, with `levels` more levels allowed
+    /// below it.
+    fn level(&self, region: Aabb, ids: &[u32], density: f32, levels: u32) -> Level {
+        let res = if region.is_empty() {
+            [1, 1, 1]
+        } else {
+            resolution_with(&region, ids.len(), None, density)
+        };
+        let lattice = Lattice::new(region, res);
+        let (offsets, items) = fill(self.prims, ids, &lattice, self.margin);
+        let cells = lattice.cells();
+        let mut child = vec![0u32; cells];
+        let mut children = Vec::new();
+        // Compacted lists: a crowded cell's primitives move to its finer grid.
+        let mut new_offsets = Vec::with_capacity(cells + 1);
+        let mut new_items = Vec::with_capacity(items.len());
+        new_offsets.push(0);
+        for k in 0..cells {
+            let list = &items[offsets[k] as usize..offsets[k + 1] as usize];
+            if levels > 0 && list.len() > self.threshold {
+                let cb = lattice.cell_bounds(index_of(&lattice, k));
+                // Padded like the cells the list was filled from, so the finer
+                // grid covers every hit the coarse cell's primitives have in it.
+                let sub = self.level(padded(&cb, self.margin), list, FINE_DENSITY, levels - 1);
+                children.push(sub);
+                child[k] = children.len() as u32;
+            } else {
+                new_items.extend_from_slice(list);
+            }
+            new_offsets.push(new_items.len() as u32);
+        }
+        Level {
+            lattice,
+            offsets: new_offsets,
+            items: new_items,
+            child,
+            children,
+        }
+    }
+}
+
+/// Cell coordinates of linear index `k` (the inverse of `Lattice::linear`).
+fn index_of(l: &Lattice, k: usize) -> [u32; 3] {
+    let (rx, ry) = (l.res[0] as usize, l.res[1] as usize);
+    [
+        (k % rx) as u32,
+        (k / rx % ry) as u32,
+        (k / (rx * ry)) as u32,
+    ]
+}
+
+fn level_bytes(l: &Level) -> usize {
+    (l.offsets.len() + l.items.len() + l.child.len()) * 4
+        + l.children.iter().map(level_bytes).sum::<usize>()
+}
+
+impl Aggregate for NestedGrid {
+    fn intersect(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+    ) -> Option<PrimHit> {
+        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
+    }
+
+    fn occluded(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+    ) -> bool {
+        let mut seen = Mailbox::new();
+        let visit = &mut |items: &[u32], _, c: &mut Counters| {
+            items.iter().any(|&id| {
+                if !seen.first_visit(id) {
+                    return false;
+                }
+                c.intersection_tests += 1;
+                prims[id as usize]
+                    .shape
+                    .intersect(ray, tmin, tmax)
+                    .is_some()
+            })
+        };
+        Self::walk(&self.top, ray, tmin, tmax, c, visit, &mut |_| {})
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    fn describe(&self) -> String {
+        let [x, y, z] = self.top.lattice.res;
+        format!(
+            "nested-grid:{}:{} {x}x{y}x{z}, {} finer grids, {} cells",
+            self.threshold,
+            self.depth,
+            self.subgrids(),
+            self.cells()
+        )
+    }
+
+    fn memory_bytes(&self) -> usize {
+        level_bytes(&self.top)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::testutil::{assert_agrees, soup, sphere};
+    use crate::math::Vec3;
+
+    fn all(prims: &[Primitive]) -> Vec<u32> {
+        (0..prims.len() as u32).collect()
+    }
+
+    #[test]
+    fn agrees_with_brute_force_at_every_setting() {
+        let prims = soup(21, 1200);
+        for (threshold, depth) in [(16, 2), (1, 1), (4, 3), (1000, 2)] {
+            let g = NestedGrid::new(&prims, all(&prims), threshold, depth);
+            assert_agrees(&g, &prims, 2000);
+        }
+    }
+
+    #[test]
+    fn crowded_cells_get_finer_grids_and_sparse_ones_do_not() {
+        // A dense cluster of tiny spheres in one corner, a few big ones elsewhere.
+        let mut prims: Vec<Primitive> = (0..400)
+            .map(|i| {
+                let p = Vec3::new((i % 8) as f32, (i / 8 % 8) as f32, (i / 64) as f32) * 0.01;
+                sphere(p, 0.003)
+            })
+            .collect();
+        prims.extend((0..7).map(|i| sphere(Vec3::splat(2.0 + i as f32), 0.2)));
+        let g = NestedGrid::new(&prims, all(&prims), 16, 2);
+        assert!(g.subgrids() >= 1);
+        // The cluster (0.08 wide) sits in one coarse cell (about 1.2 wide).
+        assert!(g.coarse_res()[0] <= 8);
+        assert_eq!(g.top.children.len(), 1);
+        let none = NestedGrid::new(&prims, all(&prims), 10_000, 2);
+        assert_eq!(none.subgrids(), 0);
+        let mut with = Counters::default();
+        let mut without = Counters::default();
+        let r = Ray::new(Vec3::new(0.035, 0.035, -1.0), Vec3::Z);
+        let a = g.intersect(&prims, &r, 0.0, f32::INFINITY, &mut with);
+        let b = none.intersect(&prims, &r, 0.0, f32::INFINITY, &mut without);
+        assert_eq!(a, b);
+        assert!(with.intersection_tests < without.intersection_tests);
+        assert_agrees(&g, &prims, 2000);
+    }
+
+    #[test]
+    fn depth_one_with_threshold_zero_is_finer_everywhere() {
+        let prims = soup(22, 300);
+        let g = NestedGrid::new(&prims, all(&prims), 0, 1);
+        // Every non-empty coarse cell holds more than 0 (clamped to 1) only
+        // when it has two or more; those all got a finer grid.
+        for (k, &c) in g.top.child.iter().enumerate() {
+            let n = (g.top.offsets[k + 1] - g.top.offsets[k]) as usize;
+            assert!(c > 0 || n <= 1, "cell {k} kept {n} primitives");
+        }
+        assert_agrees(&g, &prims, 2000);
+    }
+
+    #[test]
+    fn empty_is_empty() {
+        let g = NestedGrid::new(&[], vec![], 16, 2);
+        let r = Ray::new(Vec3::ZERO, Vec3::X);
+        assert!(g
+            .intersect(&[], &r, 0.0, f32::INFINITY, &mut Counters::default())
+            .is_none());
+        assert!(g.bounds().is_empty());
+    }
+}

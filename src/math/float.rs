@@ -1,0 +1,120 @@
+//! Floating-point error analysis helpers (pbrt-v3 §3.9, pbrt-v4 §6.8).
+//!
+//! Every f32 operation rounds its exact result by a relative error of at
+//! most `ε = 2⁻²⁴` (half an ulp). A chain of `n` such roundings stays within
+//! the factor `(1 ± ε)ⁿ`, which is bounded by `1 ± γ(n)` with
+//! `γ(n) = n·ε / (1 − n·ε)`: the constant of every error bound in `shape`.
+
+use glam::{Mat3, Mat4, Vec3};
+
+/// Half an ulp of 1: the largest relative error of one rounded f32 operation.
+pub const MACHINE_EPSILON: f32 = f32::EPSILON * 0.5;
+
+/// `γ(n) = n·ε / (1 − n·ε)`: bounds the relative error of `n` successive
+/// rounded f32 operations (Higham's bound, as in pbrt).
+#[inline]
+pub const fn gamma(n: u32) -> f32 {
+    let ne = n as f32 * MACHINE_EPSILON;
+    ne / (1.0 - ne)
+}
+
+/// `m·p` for an affine `m`, and a bound on the error of the result given a
+/// bound `err` on the error of `p` (pbrt-v4's `Transform` of a `Point3fi`):
+/// each output coordinate is three products and three sums, so it carries
+/// `γ(3)·(Σ|m_ij·p_j| + |t_i|)` of its own, plus the input's error carried
+/// by `|m|` and inflated by `1 + γ(3)`.
+#[inline]
+pub fn transform_point_with_error(m: &Mat4, p: Vec3, err: Vec3) -> (Vec3, Vec3) {
+    let q = m.transform_point3(p);
+    let lin = abs_linear(m);
+    let t = m.w_axis.truncate().abs();
+    let own = gamma(3) * (lin * p.abs() + t);
+    let carried = (1.0 + gamma(3)) * (lin * err);
+    (q, own + carried)
+}
+
+/// The error `fl(m·p)` adds to `p` (an affine `m`): `γ(3)·(Σ|m_ij·p_j| + |t_i|)`.
+#[inline]
+pub fn transform_error(m: &Mat4, p: Vec3) -> Vec3 {
+    gamma(3) * (abs_linear(m) * p.abs() + m.w_axis.truncate().abs())
+}
+
+/// The element-wise absolute value of the linear (upper 3×3) part of `m`.
+#[inline]
+pub fn abs_linear(m: &Mat4) -> Mat3 {
+    Mat3::from_cols(
+        m.x_axis.truncate().abs(),
+        m.y_axis.truncate().abs(),
+        m.z_axis.truncate().abs(),
+    )
+}
+
+/// pbrt's `OffsetRayOrigin`: moves `p`, whose coordinates are within `err`
+/// of the true surface point, along the geometric normal `n` to the side
+/// that `w` leaves towards, far enough that the whole error box lies behind
+/// the offset plane, and then rounds each moved coordinate one more ulp away
+/// from `p` (the sum `p + offset` rounds too). A ray starting there cannot
+/// re-hit the surface it leaves, whatever its direction.
+#[inline]
+pub fn offset_ray_origin(p: Vec3, err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
+    let d = n.abs().dot(err);
+    let mut offset = d * n;
+    if w.dot(n) < 0.0 {
+        offset = -offset;
+    }
+    let mut po = p + offset;
+    for i in 0..3 {
+        if offset[i] > 0.0 {
+            po[i] = po[i].next_up();
+        } else if offset[i] < 0.0 {
+            po[i] = po[i].next_down();
+        }
+    }
+    po
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_is_slightly_above_n_epsilon() {
+        assert!(gamma(1) > MACHINE_EPSILON);
+        assert!(gamma(7) > 7.0 * MACHINE_EPSILON && gamma(7) < 7.001 * MACHINE_EPSILON);
+        assert!(gamma(3) < gamma(5));
+    }
+
+    #[test]
+    fn offset_clears_the_error_box_on_the_side_of_the_new_direction() {
+        let p = Vec3::new(1e4, 2.0, -3.0);
+        let err = Vec3::new(1e-3, 2e-3, 0.0);
+        let n = Vec3::new(0.6, 0.8, 0.0);
+        let up = offset_ray_origin(p, err, n, Vec3::new(0.0, 1.0, 0.5));
+        let down = offset_ray_origin(p, err, n, Vec3::new(0.0, -1.0, 0.5));
+        let reach = n.abs().dot(err); // 0.0022: the box's extent along n
+        assert!((up - p).dot(n) >= reach && (down - p).dot(n) <= -reach);
+        assert_eq!(up.z, p.z); // no offset along an axis the normal lacks
+    }
+
+    #[test]
+    fn a_tiny_error_still_moves_one_ulp() {
+        let p = Vec3::new(1.0, 0.0, 0.0);
+        let q = offset_ray_origin(p, Vec3::ZERO, Vec3::X, Vec3::X);
+        assert_eq!(q, p); // no offset at all along any axis: nothing to round
+        let q = offset_ray_origin(p, Vec3::splat(1e-9), Vec3::X, Vec3::X);
+        assert!(q.x > p.x);
+    }
+
+    #[test]
+    fn transform_error_covers_the_exact_product() {
+        let m = Mat4::from_translation(Vec3::new(1e5, -3.0, 7.5))
+            * Mat4::from_rotation_y(0.7)
+            * Mat4::from_scale(Vec3::new(2.0, 0.3, 1.1));
+        let p = Vec3::new(0.3, -1.7, 2.9);
+        let (q, e) = transform_point_with_error(&m, p, Vec3::ZERO);
+        let exact = m.as_dmat4().transform_point3(p.as_dvec3());
+        let off = (q.as_dvec3() - exact).abs();
+        assert!(off.cmple(e.as_dvec3()).all(), "{off} > {e}");
+        assert!(e.max_element() > 0.0);
+    }
+}
