@@ -140,7 +140,7 @@ fn stream_of(sampler: &Sampler, k: u32) -> glint::render::SampleStream<'_> {
 #[test]
 fn rectangle_light_past_an_occluder_edge() {
     let sc = penumbra_scene();
-    let world = World::build(&sc, BuildOptions::default());
+    let world = World::build_world_space(&sc, BuildOptions::default());
     let light = &world.lights[0];
     assert!(!is_delta(light));
     let sampler = Sampler::new(SamplerKind::Sobol, 1, 1);
@@ -234,7 +234,7 @@ fn ambient_occlusion_open_plane_and_wall() {
         vec![white()],
         shape(plane(Vec3::Y, 0.0), 0),
     );
-    let w = World::build(&open, BuildOptions::default());
+    let w = World::build_world_space(&open, BuildOptions::default());
     for d in [1.0, 100.0, f32::INFINITY] {
         assert_eq!(ao_at(&w, Vec3::new(0.3, 1.0, -2.0), 256, d), 1.0);
     }
@@ -248,7 +248,7 @@ fn ambient_occlusion_open_plane_and_wall() {
             shape(plane(Vec3::X, 0.0), 0),
         ]),
     );
-    let w = World::build(&corner, BuildOptions::default());
+    let w = World::build_world_space(&corner, BuildOptions::default());
     let max_d = 2.0;
     let mut worst: f32 = 0.0;
     for d in [0.1f32, 0.3, 0.6, 1.0, 1.5, 2.5] {
@@ -694,7 +694,7 @@ fn noise_falls_with_samples_ambient_occlusion() {
 #[test]
 fn split_rays_converge_too() {
     let sc = penumbra_scene();
-    let world = World::build(&sc, BuildOptions::default());
+    let world = World::build_world_space(&sc, BuildOptions::default());
     let points: Vec<Vec3> = (0..64)
         .map(|i| Vec3::new(-2.5 + 5.0 * (i as f32 + 0.5) / 64.0, 1.0, 0.2))
         .collect();

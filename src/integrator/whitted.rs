@@ -174,7 +174,8 @@ impl Whitted {
                     _ => ShadowTarget::Direction(inc.to_light),
                 };
                 let from = hit.surface_point();
-                color += reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
+                color +=
+                    reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
             } else {
                 color += reflected;
             }

@@ -64,7 +64,12 @@ pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
             // Off the disk's plane only by the rounding of the in-plane
             // offsets (`t1`, `t2` are unit within a few ulps) and the sums.
             let error = gamma(6) * (center.abs() + a.abs() + b.abs());
-            from_area_point(p, SurfacePoint { p: y, error, n }, PI * radius * radius, radiance)
+            from_area_point(
+                p,
+                SurfacePoint { p: y, error, n },
+                PI * radius * radius,
+                radiance,
+            )
         }
         AreaShape::Sphere { center, radius } => sample_sphere(center, radius, radiance, p, u),
     }
