@@ -10,6 +10,7 @@ pub mod math;
 pub mod output;
 pub mod piece;
 pub mod primitive;
+pub mod query;
 pub mod render;
 pub mod scene;
 pub mod shape;

@@ -43,3 +43,32 @@ impl AddAssign for Counters {
         self.nodes_visited += o.nodes_visited;
     }
 }
+
+/// What a traversal reports when statistics are asked for: a generic
+/// parameter of the fast BVH's loops, so that with [`NoStats`] the counting
+/// compiles away and a query pays nothing for statistics it did not ask for.
+pub trait TraversalStats {
+    /// False for [`NoStats`]: the loops skip their local counting entirely.
+    const ENABLED: bool;
+    /// Adds one query's totals (called once per query, not per node).
+    fn add(&mut self, nodes_visited: u64, intersection_tests: u64);
+}
+
+impl TraversalStats for Counters {
+    const ENABLED: bool = true;
+    #[inline]
+    fn add(&mut self, nodes_visited: u64, intersection_tests: u64) {
+        self.nodes_visited += nodes_visited;
+        self.intersection_tests += intersection_tests;
+    }
+}
+
+/// Statistics not wanted: every count is optimised away.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoStats;
+
+impl TraversalStats for NoStats {
+    const ENABLED: bool = false;
+    #[inline(always)]
+    fn add(&mut self, _: u64, _: u64) {}
+}

@@ -588,6 +588,17 @@ fn bvh_sah() {
 }
 
 #[test]
+fn bvh4() {
+    let (a, b) = check(AccelKind::Bvh4, true);
+    assert!(a.intersection_tests < b.intersection_tests);
+}
+
+#[test]
+fn bvh4_unflattened() {
+    check(AccelKind::Bvh4, false);
+}
+
+#[test]
 fn bvh_median() {
     check(AccelKind::Bvh(Split::Median), true);
 }
@@ -688,6 +699,7 @@ fn cost_report() {
             AccelKind::OctreeInner,
             AccelKind::NESTED_GRID,
             AccelKind::BvhHierarchy,
+            AccelKind::Bvh4,
         ];
         let mut rq = Rng::new(5);
         let probe = World::build(&sc, BuildOptions::default());

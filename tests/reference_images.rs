@@ -200,6 +200,7 @@ fn assignment6_with_every_accelerator() {
         "nested-grid",
         "octree-inner",
         "bvh-hierarchy",
+        "bvh4",
     ] {
         let lines = plain_lines(&data, "A6_cmd.txt")
             .into_iter()

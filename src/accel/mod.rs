@@ -10,6 +10,7 @@
 //! | [`bvh`]     | binary BVH (midpoint, median or binned SAH) | stack, nearer child first     |
 //! | [`nested_grid`] | coarse grid, crowded cells hold finer grids | 3DDDA at each level       |
 //! | [`hierarchy`] | BVH of the scene's own groups and transforms | stack, nearest entry first  |
+//! | [`bvh4`]    | 4-wide BVH, 4-triangle leaf blocks (default) | 4 boxes per step, nearest first |
 //!
 //! Three rules every accelerator follows, so that each returns *exactly* the
 //! hit brute force returns:
@@ -29,6 +30,7 @@
 
 mod brute;
 pub mod bvh;
+pub mod bvh4;
 pub mod grid;
 pub mod hierarchy;
 mod kind;
@@ -41,6 +43,7 @@ pub(crate) mod testutil;
 
 pub use brute::Brute;
 pub use bvh::Bvh;
+pub use bvh4::Bvh4;
 pub use grid::Grid;
 pub use hierarchy::{HierarchyBvh, SceneTree};
 pub use kind::{AccelKind, ParseAccelError, Split};

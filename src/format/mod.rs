@@ -8,7 +8,9 @@
 mod diagnostic;
 mod input;
 mod mit6837;
+
 pub mod obj;
+mod obj_lean;
 
 pub use diagnostic::ParseError;
 

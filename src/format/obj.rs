@@ -42,8 +42,19 @@ pub(crate) fn load(path: &Path) -> Result<Mesh, LoadError> {
     parse_obj(&bytes, path).map_err(LoadError::Parse)
 }
 
-/// Parses OBJ `bytes`; `path` is used in messages.
+/// Parses OBJ `bytes`; `path` is used in messages. Plain meshes (`v`/`f`
+/// lines only) take the lean parallel reader (`obj_lean.rs`); anything else,
+/// and every malformed file, the careful one below.
 pub(crate) fn parse_obj(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
+    let text = decode(bytes, path)?;
+    if let Some(mesh) = super::obj_lean::parse(text) {
+        return Ok(mesh);
+    }
+    parse_obj_careful(bytes, path)
+}
+
+/// The careful reader: every line checked with positions, then `tobj`.
+pub(crate) fn parse_obj_careful(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
     let text = decode(bytes, path)?;
     check(text, path)?;
     // `tobj` turns a polyline of 3+ points into a face; a mesh has no lines,

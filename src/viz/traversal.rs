@@ -70,6 +70,11 @@ impl Structure {
                 // Built from the world's recorded scene tree, as the renderer's.
                 Structure::Hierarchy(HierarchyBvh::new(&world.prims, ids, &world.scene_tree))
             }
+            // The fast BVH records no walk (its loops are kept free of
+            // observers); its teaching twin, the binary SAH BVH, is shown.
+            AccelKind::Bvh4 => {
+                Structure::Bvh(Bvh::new(&world.prims, ids, crate::accel::Split::Sah))
+            }
         })
     }
 

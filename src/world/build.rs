@@ -15,7 +15,8 @@
 
 use super::{Primitive, World};
 use crate::accel::{
-    AccelKind, Aggregate, Brute, Bvh, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree, Storage,
+    AccelKind, Aggregate, Brute, Bvh, Bvh4, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree,
+    Storage,
 };
 use crate::math::Vec3;
 use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
@@ -174,6 +175,7 @@ fn build_aggregate(
             Box::new(NestedGrid::new(prims, ids, threshold, depth))
         }
         AccelKind::BvhHierarchy => Box::new(HierarchyBvh::new(prims, ids, tree)),
+        AccelKind::Bvh4 => Box::new(Bvh4::new(prims, ids)),
     }
 }
 
@@ -204,6 +206,7 @@ impl Flattener {
                 let instance = (self.object_from_world.len() - 1) as u32;
                 SceneTree::Transform {
                     to_world: m.as_mat4(),
+                    to_object: inv.as_mat4(),
                     child: Box::new(self.node(child, m, instance)),
                 }
             }

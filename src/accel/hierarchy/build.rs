@@ -13,8 +13,9 @@ enum Draft {
     Inner {
         bounds: Aabb,
         children: Vec<Draft>,
-        /// Object-to-world matrix of a transform node that carries the ray.
-        space: Option<Mat4>,
+        /// Object-to-world and world-to-object matrices of a transform node
+        /// that carries the ray.
+        space: Option<(Mat4, Mat4)>,
     },
     Leaf {
         bounds: Aabb,
@@ -41,7 +42,7 @@ impl Draft {
     }
 }
 
-fn inner(children: Vec<Draft>, space: Option<Mat4>) -> Draft {
+fn inner(children: Vec<Draft>, space: Option<(Mat4, Mat4)>) -> Draft {
     let bounds = children
         .iter()
         .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds()));
@@ -105,7 +106,11 @@ impl Builder<'_> {
                     .collect();
                 (!kids.is_empty()).then(|| bundle(kids))
             }
-            SceneTree::Transform { to_world, child } => {
+            SceneTree::Transform {
+                to_world,
+                to_object,
+                child,
+            } => {
                 let c = self.convert(child, Some(to_world))?;
                 if !c.uses_space() {
                     return Some(c); // a box like its child's: skip the node
@@ -118,7 +123,7 @@ impl Builder<'_> {
                     } => children,
                     other => vec![other],
                 };
-                Some(inner(kids, Some(*to_world)))
+                Some(inner(kids, Some((*to_world, *to_object))))
             }
             SceneTree::Shape(range) => {
                 let ids: Vec<u32> = range
@@ -185,10 +190,11 @@ fn flatten(d: Draft, k: usize, depth: usize, out: &mut HierarchyBvh) {
             space,
         } => {
             let first = out.nodes.len();
-            let space = space.map_or(NO_SPACE, |m| {
-                // The matrix `Transformed::new` computes from the same
-                // `to_world`, so object rays (and hits) are bit-identical.
-                out.spaces.push(m.inverse());
+            let space = space.map_or(NO_SPACE, |(_, to_object)| {
+                // The matrix the wrappers below carry rays with (inverted in
+                // f64 by the flattener, as `Transformed::from_f64` does), so
+                // object rays (and hits) are bit-identical.
+                out.spaces.push(to_object);
                 out.spaces.len() as u32 - 1
             });
             out.nodes[k] = Node {

@@ -51,6 +51,9 @@ pub enum SceneTree {
         /// Object-to-world matrix of the child: every transform above it
         /// composed (the matrix the flattener baked or wrapped with).
         to_world: Mat4,
+        /// Its inverse, as the wrappers below use it (inverted in f64, then
+        /// rounded: not the f32 inverse of `to_world`).
+        to_object: Mat4,
         /// The transformed subtree.
         child: Box<SceneTree>,
     },

@@ -101,6 +101,7 @@ fn a_transform_node_carries_the_ray_once() {
     let n = prims.len() as u32;
     let tree = SceneTree::Group(vec![SceneTree::Transform {
         to_world: m,
+        to_object: m.as_dmat4().inverse().as_mat4(),
         child: Box::new(SceneTree::Group(vec![
             SceneTree::Shape(0..n / 2),
             SceneTree::Shape(n / 2..n),
@@ -134,6 +135,7 @@ fn a_transform_node_carries_the_ray_once() {
     // world space (each wrapper carries the ray itself): still exact.
     let other = SceneTree::Transform {
         to_world: Mat4::IDENTITY,
+        to_object: Mat4::IDENTITY,
         child: Box::new(SceneTree::Shape(0..n)),
     };
     let h = HierarchyBvh::new(&prims, all(&prims), &other);

@@ -36,7 +36,7 @@ pub struct BenchArgs {
     pub only: Option<String>,
 }
 
-const ACCELS: [AccelKind; 9] = [
+const ACCELS: [AccelKind; 10] = [
     AccelKind::None,
     AccelKind::Grid { res: None },
     AccelKind::NESTED_GRID,
@@ -46,6 +46,7 @@ const ACCELS: [AccelKind; 9] = [
     AccelKind::Bvh(Split::Median),
     AccelKind::Bvh(Split::Sah),
     AccelKind::BvhHierarchy,
+    AccelKind::Bvh4,
 ];
 
 /// One scene to bench, flattened or not (`--no-flatten` rows show what the

@@ -24,6 +24,7 @@ struct Cli {
 
 mod bench;
 mod bench_loop;
+mod bench_rays;
 mod deep;
 mod merge;
 mod raytree;
@@ -32,8 +33,13 @@ mod traverse;
 
 #[derive(Subcommand)]
 enum Command {
-    /// Time every accelerator on glint's own example scenes (or the course's meshes, and any OBJ given).
+    /// Time every accelerator on glint's own example scenes (or the course's meshes, and any OBJ given);
+    /// `glint bench rays MESH PREFIX` traces the anchors' ray files.
+    #[command(args_conflicts_with_subcommands = true)]
     Bench {
+        /// `rays`: the fast BVH on a mesh and ray files, Embree's checksums.
+        #[command(subcommand)]
+        what: Option<BenchWhat>,
         /// Folder of glint's own example scenes.
         #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
@@ -85,6 +91,27 @@ enum Command {
     },
 }
 
+#[derive(Subcommand)]
+enum BenchWhat {
+    /// Build the default BVH over MESH and trace PREFIX.primary.rays,
+    /// PREFIX.incoherent.rays (closest hit) and PREFIX.shadow.rays (any hit).
+    Rays {
+        /// The mesh (OBJ).
+        mesh: PathBuf,
+        /// Ray file prefix (as written by the anchors' raygen and embree_bench).
+        prefix: String,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+        /// Also print nodes visited and triangles tested per ray (untimed pass).
+        #[arg(long)]
+        stats: bool,
+    },
+}
+
 const RENDER_HELP: &str = "Render a scene to an image.
 
 SCENE is a scene file in the MIT 6.837 format, or a bare Wavefront .obj mesh, which renders \
@@ -129,8 +156,8 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
-    #[arg(long, default_value = "bvh")]
+    /// Accelerator: bvh4 (the fast default), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
+    #[arg(long, default_value = "bvh4")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
@@ -173,6 +200,7 @@ struct RenderArgs {
     samples_image: Option<PathBuf>,
     /// Also write per-pixel cost: intersection tests (left) and nodes or cells visited (right), as heat maps with scale bars and totals.
     #[arg(long, value_name = "FILE")]
+    cost_image: Option<PathBuf>,
     /// Render only piece I of N (0-based horizontal bands of the frame) and write it as an EXR with that data window, for `glint merge`.
     #[arg(long, value_name = "I/N", conflicts_with_all = ["tile_from_env", "crop"])]
     tile: Option<String>,
@@ -182,7 +210,6 @@ struct RenderArgs {
     /// Render only the pixels X0..X1 x Y0..Y1 (half-open; x right, y down from the top) as an EXR piece.
     #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"])]
     crop: Option<Vec<u32>>,
-    cost_image: Option<PathBuf>,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_samples: Option<Vec<String>>,
@@ -262,6 +289,30 @@ fn real_main() -> ExitCode {
         Command::Traverse(a) => traverse::run(a),
         Command::Structure(a) => structure::run(a),
         Command::Bench {
+            what:
+                Some(BenchWhat::Rays {
+                    mesh,
+                    prefix,
+                    threads,
+                    json,
+                    stats,
+                }),
+            ..
+        } => match bench_rays::run(&bench_rays::RaysArgs {
+            mesh,
+            prefix,
+            threads,
+            json,
+            stats,
+        }) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("glint: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Command::Bench {
+            what: None,
             scenes,
             course,
             mesh,

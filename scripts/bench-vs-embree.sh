@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# glint's fast BVH against Embree on the anchors' meshes and rays, as ratios taken in one run.
+# usage: scripts/bench-vs-embree.sh [WORKDIR] [REPS] [MESHES...]
+#   WORKDIR  anchors' work folder (default $TMPDIR/glint-anchors); ../shared/anchors/run.sh fills it
+#            (apt-installs libembree-dev, builds the harness, makes meshes and rays; ~5 minutes once)
+#   REPS     repetitions (default 3); each ratio in the table is the median over them
+#   MESHES   default: bunny40k sphere1m sphere4m
+# Each repetition runs Embree's harness and `glint bench rays` back to back, per mesh and thread
+# count (1 and 2), so both see the same machine load; both report the best of 3 passes after a
+# warm-up. Ratios: throughput glint/Embree (>1: glint faster), build time glint/Embree MEDIUM (<1:
+# glint faster), both against Embree's default MEDIUM build and single-ray queries (rtcIntersect1 /
+# rtcOccluded1). Raw outputs are kept in WORKDIR/compare/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+work=${1:-${TMPDIR:-/tmp}/glint-anchors}
+reps=${2:-3}
+shift $(( $# > 2 ? 2 : $# ))
+meshes=${*:-bunny40k sphere1m sphere4m}
+anchors=../shared/anchors
+[ -d "$anchors" ] || anchors=/work/shared/anchors
+if ! [ -x "$work/embree_bench" ] || ! [ -f "$work/rays/sphere4m.shadow.rays" ]; then
+  bash "$anchors/run.sh" "$work" >/dev/null
+fi
+cargo build --release --quiet --bin glint
+out="$work/compare"
+mkdir -p "$out"
+# SUMMARY_ONLY=1: only print the table from the outputs already in WORKDIR/compare (e.g. after
+# stopping a long run); incomplete repetitions are left out and the table says how many were used.
+[ "${SUMMARY_ONLY:-0}" = 1 ] || rm -f "$out"/*.txt "$out"/*.json
+for rep in $(seq 1 "$reps"); do
+  [ "${SUMMARY_ONLY:-0}" = 1 ] && break
+  for m in $meshes; do
+    for t in 1 2; do
+      echo "rep $rep: $m, $t thread(s)" >&2
+      "$work/embree_bench" "$work/$m.obj" "$work/rays/$m" "$t" > "$out/embree.$m.$t.$rep.txt"
+      ./target/release/glint bench rays "$work/$m.obj" "$work/rays/$m" --threads "$t" --json \
+        > "$out/glint.$m.$t.$rep.json"
+    done
+  done
+done
+python3 - "$out" "$reps" $meshes <<'PY'
+import json, re, statistics, sys
+out, reps, meshes = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+def embree(path):
+    e = {}
+    for line in open(path):
+        if m := re.match(r"build MEDIUM threads=\d+: best ([\d.]+) ms", line):
+            e["build_ms"] = float(m[1])
+        elif m := re.match(r"\s+MEDIUM T=\d+ (primary|incoherent)\s+rtcIntersect1\s+([\d.]+) Mrays/s\s+hits=(\d+) tsum=([\d.e+]+)", line):
+            e[m[1]] = {"mrays": float(m[2]), "hits": int(m[3]), "tsum": float(m[4])}
+        elif m := re.match(r"\s+MEDIUM T=\d+ shadow\s+rtcOccluded1\s+([\d.]+) Mrays/s\s+occluded=(\d+)", line):
+            e["shadow"] = {"mrays": float(m[1]), "occluded": int(m[2])}
+    return e
+def close(a, b):  # the issue's criterion: within 0.1%
+    return abs(a - b) <= 1e-3 * max(abs(a), abs(b), 1e-30)
+print("| mesh | threads | primary | incoherent | shadow | build (glint/Embree MEDIUM) | glint build ms | Embree build ms | bytes/triangle | checksums |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for m in meshes:
+    for t in (1, 2):
+        rows = []
+        ok = True
+        for rep in range(1, reps + 1):
+            try:  # a repetition cut short (see SUMMARY_ONLY) is left out
+                e = embree(f"{out}/embree.{m}.{t}.{rep}.txt")
+                g = json.load(open(f"{out}/glint.{m}.{t}.{rep}.json"))
+                e["shadow"]
+            except (OSError, ValueError, KeyError):
+                continue
+            for k in ("primary", "incoherent"):
+                ok &= close(g[k]["hits"], e[k]["hits"]) and close(g[k]["tsum"], e[k]["tsum"])
+            ok &= close(g["shadow"]["occluded"], e["shadow"]["occluded"])
+            rows.append({
+                "primary": g["primary"]["mrays"] / e["primary"]["mrays"],
+                "incoherent": g["incoherent"]["mrays"] / e["incoherent"]["mrays"],
+                "shadow": g["shadow"]["mrays"] / e["shadow"]["mrays"],
+                "build": g["build_ms"] / e["build_ms"],
+                "gb": g["build_ms"], "eb": e["build_ms"], "bytes": g["bytes_per_triangle"],
+            })
+        if not rows:
+            print(f"| {m} | {t} | not measured | | | | | | | |")
+            continue
+        med = {k: statistics.median(r[k] for r in rows) for k in rows[0]}
+        print(f"| {m} | {t} ({len(rows)} rep.) | {med['primary']:.2f} | {med['incoherent']:.2f} | {med['shadow']:.2f} | "
+              f"{med['build']:.2f} | {med['gb']:.0f} | {med['eb']:.0f} | {med['bytes']:.1f} | "
+              f"{'within 0.1%' if ok else 'DIFFER'} |")
+print(f"\nratios: medians over the repetitions shown (of {reps} planned); throughput ratios > 1 and build ratios < 1 favour glint")
+PY

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Whole render of scene6_07 (40k-triangle bunny on a plane, two directional lights, shadows):
+# glint against Mitsuba 3's scalar_rgb direct integrator, in one run, as ratios.
+# usage: scripts/bench-vs-mitsuba.sh [VENV] [REPS] [SIZE]
+#   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
+#         `pip install mitsuba` on first use)
+#   REPS  repetitions (default 3): medians are reported
+#   SIZE  image size (default 800)
+# Samples per pixel: 1, and 16 when `glint render --help` lists --spp (or SPPS="1 16"). Threads: 1 and 2 for glint;
+# Mitsuba is timed with its default (all cores) pool, which is what its README figure is.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+venv=${1:-target/mitsuba-venv}
+reps=${2:-3}
+size=${3:-800}
+shared=../shared
+[ -d "$shared/anchors" ] || shared=/work/shared
+if ! [ -x "$venv/bin/python" ]; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet mitsuba
+fi
+cargo build --release --quiet --bin glint
+spps=${SPPS:-}
+if [ -z "$spps" ]; then
+  # (not `| grep -q`: with pipefail, grep's early exit fails the pipe)
+  help=$(./target/release/glint render --help)
+  if grep -q -- "--spp" <<<"$help"; then spps="1 16"; else spps="1"; fi
+fi
+scene="$shared/scenes/6837/scene6_07_bunny_mesh_40k.txt"
+tmp=$(mktemp -d)
+echo "| spp | Mitsuba s | glint s, 2 threads | glint/Mitsuba | glint s, 1 thread | 2-thread speed-up |"
+echo "|---|---|---|---|---|---|"
+for spp in $spps; do
+  m=(); g2=(); g1=()
+  extra=()
+  [ "$spp" = 1 ] || extra=(--spp "$spp")
+  for _ in $(seq 1 "$reps"); do
+    m+=("$("$venv/bin/python" "$shared/anchors/mitsuba_scene6_07.py" "$shared" "$size" "$spp" | sed -E 's/.*: ([0-9.]+) s/\1/')")
+    for t in 2 1; do
+      # glint's own timer: the render alone (scene loading and BVH build excluded, as for Mitsuba).
+      ./target/release/glint render "$scene" -o "$tmp/glint.png" --size "$size" "$size" --shadows \
+        --threads "$t" --quiet --stats-json "$tmp/stats.json" "${extra[@]}" >/dev/null
+      s=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['render_ms']/1e3)" "$tmp/stats.json")
+      if [ "$t" = 2 ]; then g2+=("$s"); else g1+=("$s"); fi
+    done
+  done
+  python3 - "$spp" "${m[*]}" "${g2[*]}" "${g1[*]}" <<'PY'
+import statistics, sys
+spp = sys.argv[1]
+m, g2, g1 = (statistics.median(map(float, a.split())) for a in sys.argv[2:5])
+print(f"| {spp} | {m:.3f} | {g2:.3f} | {g2 / m:.2f} | {g1:.3f} | {g1 / g2:.2f}x |")
+PY
+done
+rm -rf "$tmp"

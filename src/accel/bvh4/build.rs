@@ -1,0 +1,644 @@
+//! Building the 4-wide BVH: binned SAH splits (in parallel for large nodes),
+//! each node taking up to four children by splitting its largest child
+//! again, then the leaves' triangles copied into four-wide blocks.
+
+use super::node::{is_leaf, leaf, leaf_range, Node4, Tri4, EMPTY, MAX_LEAF_ITEMS, OTHER};
+use crate::accel::overlap::margin;
+use crate::math::{Aabb, Vec3};
+use glam::Vec3A;
+use rayon::prelude::*;
+
+/// What one item of the source is.
+pub(crate) enum Item {
+    /// A triangle (tested four at a time in the leaves).
+    Triangle([Vec3; 3]),
+    /// Something else with these bounds, tested through the fallback.
+    Other(Aabb),
+    /// Never hit (a degenerate triangle): left out of the tree.
+    Skip,
+}
+
+/// The items a BVH is built over. Ids are what the traversal reports (the
+/// world's primitive indices, a mesh's triangle indices).
+pub(crate) trait Source: Sync {
+    /// How many items.
+    fn count(&self) -> usize;
+    /// The id of the `k`-th item.
+    fn id(&self, k: usize) -> u32;
+    /// The item with id `id`.
+    fn item(&self, id: u32) -> Item;
+}
+
+/// Bins per axis of the SAH sweep.
+const BINS: usize = 32;
+/// Cost of a binary split step relative to testing one block of four items:
+/// a 4-wide node is about one block test, and takes two binary steps.
+const SPLIT_COST: f32 = 0.5;
+/// Below this many items a node's subtrees are built on one thread.
+const PARALLEL_ITEMS: usize = 16 * 1024;
+/// Binning is split over threads above this many items.
+const PARALLEL_BINNING: usize = 64 * 1024;
+/// Deepest 4-wide level: the traversal stack (64 entries) holds at most
+/// `3 · depth + 1` pending children.
+const MAX_DEPTH: usize = 20;
+
+/// One item during the build: its bounds and id (32 bytes).
+#[derive(Clone, Copy, Debug)]
+struct PrimRef {
+    lo: Vec3,
+    id: u32,
+    hi: Vec3,
+    other: u32,
+}
+
+impl PrimRef {
+    #[inline]
+    fn centroid(&self) -> Vec3 {
+        (self.lo + self.hi) * 0.5
+    }
+}
+
+/// A contiguous range of references: its bounds, its centroids' bounds.
+#[derive(Clone, Copy, Debug)]
+struct Range {
+    begin: usize,
+    end: usize,
+    bounds: Aabb,
+    cbounds: Aabb,
+}
+
+impl Range {
+    fn len(&self) -> usize {
+        self.end - self.begin
+    }
+}
+
+/// How to divide a range.
+#[derive(Clone, Copy, Debug)]
+enum Plan {
+    /// Items whose centroid falls below bin `pos` (of `bins`) of `axis` go left.
+    Bin {
+        axis: usize,
+        pos: usize,
+        bins: usize,
+    },
+    /// Equal halves along the centroids' longest axis.
+    Median { axis: usize },
+}
+
+/// The built tree (see `Bvh4`).
+pub(crate) struct Built {
+    pub nodes: Vec<Node4>,
+    pub tris: Vec<Tri4>,
+    pub bounds: Aabb,
+}
+
+/// Builds the tree over every item of `src`.
+pub(crate) fn build<S: Source>(src: &S) -> Built {
+    let n = src.count();
+    assert!(
+        n < 1 << 28 && (0..n).all(|k| src.id(k) & OTHER == 0),
+        "the fast BVH holds fewer than 2^28 primitives, with ids below 2^31 (got {n})"
+    );
+    // An indexed map writes straight into the vector (a filtering
+    // collect would gather pieces and copy them); skipped items are
+    // dropped afterwards in place.
+    const SKIPPED: u32 = u32::MAX;
+    let mut refs: Vec<PrimRef> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|k| {
+            let id = src.id(k);
+            let (b, other) = match src.item(id) {
+                Item::Triangle(v) => (Aabb::from_points(v), 0),
+                Item::Other(b) => (b, 1),
+                Item::Skip => (Aabb::EMPTY, SKIPPED),
+            };
+            PrimRef {
+                lo: b.min,
+                id,
+                hi: b.max,
+                other,
+            }
+        })
+        .collect();
+    refs.retain(|r| r.other != SKIPPED);
+    let (bounds, cbounds) = bounds_of(&refs);
+    if refs.is_empty() {
+        return Built {
+            nodes: Vec::new(),
+            tris: Vec::new(),
+            bounds: Aabb::EMPTY,
+        };
+    }
+    let builder = Builder {
+        pad: Vec3::splat(margin(&bounds)),
+    };
+    let all = Range {
+        begin: 0,
+        end: refs.len(),
+        bounds,
+        cbounds,
+    };
+    let plan = builder.plan(&refs, &all, 0);
+    let mut nodes = Vec::with_capacity(refs.len() / 8 + 1);
+    let root = builder.subtree(&mut refs, all, plan, 0, &mut nodes);
+    if is_leaf(root) {
+        // A tree of one leaf still starts at a node.
+        let mut node = Node4::EMPTY;
+        builder.set_child(&mut node, 0, root, &all);
+        nodes.push(node);
+    }
+    let tris = fill_leaves(&mut nodes, &refs, src);
+    Built {
+        nodes,
+        tris,
+        bounds,
+    }
+}
+
+/// Bounds of the boxes and of the centroids.
+fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
+    let one = |r: &[PrimRef]| {
+        r.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), p| {
+            (
+                Aabb::new(b.min.min(p.lo), b.max.max(p.hi)),
+                c.grow(p.centroid()),
+            )
+        })
+    };
+    if refs.len() < PARALLEL_BINNING {
+        return one(refs);
+    }
+    refs.par_chunks(8192).map(one).reduce(
+        || (Aabb::EMPTY, Aabb::EMPTY),
+        |a, b| (a.0.union(&b.0), a.1.union(&b.1)),
+    )
+}
+
+/// Blocks of four a leaf of `n` items needs: the SAH counts blocks, not
+/// items, so leaves come out full.
+#[inline]
+fn blocks(n: usize) -> f32 {
+    n.div_ceil(4) as f32
+}
+
+/// Per-axis bins: item counts and box bounds. `B` bins: small ranges use
+/// fewer, because clearing and sweeping 32 bins costs more than binning a
+/// handful of items (most nodes of a tree are small).
+#[derive(Clone)]
+struct Bins<const B: usize> {
+    count: [[u32; B]; 3],
+    lo: [[Vec3A; B]; 3],
+    hi: [[Vec3A; B]; 3],
+}
+
+impl<const B: usize> Bins<B> {
+    fn new() -> Self {
+        Bins {
+            count: [[0; B]; 3],
+            lo: [[Vec3A::INFINITY; B]; 3],
+            hi: [[Vec3A::NEG_INFINITY; B]; 3],
+        }
+    }
+
+    fn add(&mut self, refs: &[PrimRef], map: &BinMap) {
+        for r in refs {
+            let k = map.bins::<B>(r.centroid());
+            let (lo, hi) = (Vec3A::from(r.lo), Vec3A::from(r.hi));
+            for a in 0..3 {
+                let k = k[a];
+                self.count[a][k] += 1;
+                self.lo[a][k] = self.lo[a][k].min(lo);
+                self.hi[a][k] = self.hi[a][k].max(hi);
+            }
+        }
+    }
+
+    fn merge(mut self, o: Self) -> Self {
+        for a in 0..3 {
+            for k in 0..B {
+                self.count[a][k] += o.count[a][k];
+                self.lo[a][k] = self.lo[a][k].min(o.lo[a][k]);
+                self.hi[a][k] = self.hi[a][k].max(o.hi[a][k]);
+            }
+        }
+        self
+    }
+}
+
+/// Centroid → bin, per axis, for `B` bins (the scale assumes 1; `bins`
+/// multiplies by `B`).
+struct BinMap {
+    min: Vec3,
+    scale: Vec3,
+}
+
+impl BinMap {
+    fn new(cb: &Aabb) -> Self {
+        let e = cb.extent();
+        // Just under 1 so that the largest centroid lands in the last bin.
+        let s = 1.0 - 1e-6;
+        BinMap {
+            min: cb.min,
+            scale: Vec3::select(e.cmpgt(Vec3::ZERO), Vec3::splat(s) / e, Vec3::ZERO),
+        }
+    }
+
+    #[inline]
+    fn bins<const B: usize>(&self, c: Vec3) -> [usize; 3] {
+        let k = (c - self.min) * self.scale * B as f32;
+        // `as usize` saturates: negatives and NaN give 0.
+        [k.x, k.y, k.z].map(|x| (x as usize).min(B - 1))
+    }
+}
+
+/// Bins for ranges of fewer than `SMALL_RANGE` items.
+const SMALL_BINS: usize = 8;
+/// See [`SMALL_BINS`].
+const SMALL_RANGE: usize = 64;
+
+/// Bins of a small range, on this thread.
+fn small_bins(items: &[PrimRef], cb: &Aabb) -> Bins<SMALL_BINS> {
+    let mut b = Bins::new();
+    b.add(items, &BinMap::new(cb));
+    b
+}
+
+/// Bins of a large range, in parallel when it is very large.
+fn large_bins(items: &[PrimRef], cb: &Aabb) -> Bins<BINS> {
+    let map = BinMap::new(cb);
+    if items.len() >= PARALLEL_BINNING {
+        items
+            .par_chunks(16 * 1024)
+            .fold(Bins::new, |mut b, c| {
+                b.add(c, &map);
+                b
+            })
+            .reduce(Bins::new, Bins::merge)
+    } else {
+        let mut b = Bins::new();
+        b.add(items, &map);
+        b
+    }
+}
+
+/// The cheapest plane: `(cost, axis, first bin on the right)`; the cost is
+/// the children's `area × blocks` (infinite when no plane separates items).
+fn sweep<const B: usize>(bins: &Bins<B>, n: usize, ce: Vec3) -> (f32, usize, usize) {
+    let mut best = (f32::INFINITY, 0, 0);
+    for a in 0..3 {
+        if ce[a] <= 0.0 {
+            continue;
+        }
+        // Right-to-left: cost of the right side of each plane.
+        let mut right = [0f32; B];
+        let (mut lo, mut hi, mut c) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0usize);
+        for k in (1..B).rev() {
+            lo = lo.min(bins.lo[a][k]);
+            hi = hi.max(bins.hi[a][k]);
+            c += bins.count[a][k] as usize;
+            right[k] = if c == 0 {
+                f32::INFINITY
+            } else {
+                area(lo, hi) * blocks(c)
+            };
+        }
+        let (mut lo, mut hi, mut c) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0usize);
+        #[allow(clippy::needless_range_loop)] // k indexes bins and `right` alike
+        for k in 1..B {
+            lo = lo.min(bins.lo[a][k - 1]);
+            hi = hi.max(bins.hi[a][k - 1]);
+            c += bins.count[a][k - 1] as usize;
+            if c == 0 || c == n {
+                continue;
+            }
+            let cost = area(lo, hi) * blocks(c) + right[k];
+            if cost < best.0 {
+                best = (cost, a, k);
+            }
+        }
+    }
+    best
+}
+
+fn area(lo: Vec3A, hi: Vec3A) -> f32 {
+    let e = (hi - lo).max(Vec3A::ZERO);
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+}
+
+struct Builder {
+    pad: Vec3,
+}
+
+impl Builder {
+    /// How to divide `r`, or `None` for a leaf.
+    /// `items` are the range's references; `depth` is the 4-wide level the
+    /// range's node would sit at.
+    fn plan(&self, items: &[PrimRef], r: &Range, depth: usize) -> Option<Plan> {
+        let n = r.len();
+        if n <= 4 {
+            return None;
+        }
+        let ce = r.cbounds.extent();
+        let axis = if ce.x >= ce.y && ce.x >= ce.z {
+            0
+        } else if ce.y >= ce.z {
+            1
+        } else {
+            2
+        };
+        if ce[axis] <= 0.0 {
+            // Coincident centroids: no plane separates them.
+            return (n > MAX_LEAF_ITEMS).then_some(Plan::Median { axis });
+        }
+        // Median splits quarter a range per level (two halvings), so about
+        // log4(n) more levels finish it: switch to them while that still
+        // fits under MAX_DEPTH (only degenerate inputs ever get here).
+        let levels_left = (usize::BITS - n.leading_zeros()) as usize / 2 + 2;
+        if depth + levels_left >= MAX_DEPTH {
+            return Some(Plan::Median { axis });
+        }
+        let best = if n < SMALL_RANGE {
+            sweep(&small_bins(items, &r.cbounds), n, ce)
+        } else {
+            sweep(&large_bins(items, &r.cbounds), n, ce)
+        };
+        let whole = r.bounds.surface_area();
+        let split = SPLIT_COST * whole + best.0;
+        if n <= MAX_LEAF_ITEMS && whole * blocks(n) <= split {
+            return None;
+        }
+        if !best.0.is_finite() {
+            return Some(Plan::Median { axis });
+        }
+        Some(Plan::Bin {
+            axis: best.1,
+            pos: best.2,
+            bins: if n < SMALL_RANGE { SMALL_BINS } else { BINS },
+        })
+    }
+
+    /// Divides `r` (its items are `refs`, which starts at `r.begin`) by
+    /// `plan` into two non-empty ranges with their bounds.
+    fn divide(&self, refs: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
+        let (mid, (lb, lc), (rb, rc)) = match plan {
+            Plan::Bin { axis, pos, bins } => {
+                let map = BinMap::new(&r.cbounds);
+                let (min, scale) = (map.min[axis], map.scale[axis] * bins as f32);
+                // The same arithmetic as `BinMap::bins`, on one axis.
+                partition(refs, |p| {
+                    let c = (p.lo[axis] + p.hi[axis]) * 0.5;
+                    ((((c - min) * scale) as usize).min(bins - 1)) < pos
+                })
+            }
+            Plan::Median { axis } => {
+                let mid = refs.len() / 2;
+                refs.select_nth_unstable_by(mid, |a, b| {
+                    a.centroid()[axis].total_cmp(&b.centroid()[axis])
+                });
+                let (l, rt) = refs.split_at(mid);
+                (mid, bounds_of(l), bounds_of(rt))
+            }
+        };
+        debug_assert!(mid > 0 && mid < refs.len());
+        let m = r.begin + mid;
+        (
+            Range {
+                begin: r.begin,
+                end: m,
+                bounds: lb,
+                cbounds: lc,
+            },
+            Range {
+                begin: m,
+                end: r.end,
+                bounds: rb,
+                cbounds: rc,
+            },
+        )
+    }
+
+    fn set_child(&self, node: &mut Node4, i: usize, c: u32, r: &Range) {
+        node.set(i, c, r.bounds.min - self.pad, r.bounds.max + self.pad);
+    }
+
+    /// Builds the subtree over `r` (whose items are exactly `refs`) and
+    /// appends its nodes to `out`, parent first. Returns its reference: a
+    /// leaf (items `begin..end`, rewritten to blocks by `fill_leaves`) or
+    /// the index of its root in `out`.
+    fn subtree(
+        &self,
+        refs: &mut [PrimRef],
+        r: Range,
+        plan: Option<Plan>,
+        depth: usize,
+        out: &mut Vec<Node4>,
+    ) -> u32 {
+        let Some(plan) = plan else {
+            return leaf(r.begin, r.len());
+        };
+        // Up to four children: split the largest child that wants splitting.
+        let mut kids: Vec<(Range, Option<Plan>)> = Vec::with_capacity(4);
+        let (a, b) = self.divide(refs_of(refs, &r, &r), &r, plan);
+        let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
+        let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
+        kids.push((a, pa));
+        kids.push((b, pb));
+        while kids.len() < 4 {
+            let pick = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, k)| k.1.is_some())
+                .max_by(|x, y| {
+                    x.1 .0
+                        .bounds
+                        .surface_area()
+                        .total_cmp(&y.1 .0.bounds.surface_area())
+                })
+                .map(|(i, _)| i);
+            let Some(i) = pick else { break };
+            let (k, p) = kids.remove(i);
+            let (a, b) = self.divide(refs_of(refs, &r, &k), &k, p.expect("filtered"));
+            let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
+            let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
+            kids.insert(i, (b, pb));
+            kids.insert(i, (a, pa));
+        }
+        let at = out.len();
+        out.push(Node4::EMPTY);
+        let mut node = Node4::EMPTY;
+        if r.len() >= PARALLEL_ITEMS {
+            // Children in parallel, each into its own array, then appended
+            // with their node indices shifted.
+            let mut slices = Vec::with_capacity(4);
+            let mut rest = &mut *refs;
+            let mut base = r.begin;
+            for (k, p) in &kids {
+                let (mine, tail) = rest.split_at_mut(k.end - base);
+                slices.push((&mut mine[k.begin - base..], *k, *p));
+                rest = tail;
+                base = k.end;
+            }
+            let subs: Vec<(u32, Vec<Node4>)> = slices
+                .into_par_iter()
+                .map(|(s, k, p)| {
+                    let mut v = Vec::with_capacity(s.len() / 8 + 1);
+                    let c = self.subtree(s, k, p, depth + 1, &mut v);
+                    (c, v)
+                })
+                .collect();
+            for (i, ((c, v), (k, _))) in subs.into_iter().zip(&kids).enumerate() {
+                let shift = out.len() as u32;
+                let c = if is_leaf(c) { c } else { c + shift };
+                out.extend(v.into_iter().map(|mut n| {
+                    for ch in &mut n.child {
+                        if !is_leaf(*ch) {
+                            *ch += shift;
+                        }
+                    }
+                    n
+                }));
+                self.set_child(&mut node, i, c, k);
+            }
+        } else {
+            for (i, (k, p)) in kids.iter().enumerate() {
+                let sub = refs_of(refs, &r, k);
+                let c = self.subtree(sub, *k, *p, depth + 1, out);
+                self.set_child(&mut node, i, c, k);
+            }
+        }
+        out[at] = node;
+        at as u32
+    }
+}
+
+/// The items of `k` within `refs`, which holds the items of `r`.
+fn refs_of<'a>(refs: &'a mut [PrimRef], r: &Range, k: &Range) -> &'a mut [PrimRef] {
+    &mut refs[k.begin - r.begin..k.end - r.begin]
+}
+
+/// Bounds and centroid bounds, accumulated item by item.
+struct Acc {
+    lo: Vec3A,
+    hi: Vec3A,
+    clo: Vec3A,
+    chi: Vec3A,
+}
+
+impl Acc {
+    fn new() -> Self {
+        Acc {
+            lo: Vec3A::INFINITY,
+            hi: Vec3A::NEG_INFINITY,
+            clo: Vec3A::INFINITY,
+            chi: Vec3A::NEG_INFINITY,
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, p: &PrimRef) {
+        let (lo, hi) = (Vec3A::from(p.lo), Vec3A::from(p.hi));
+        let c = (lo + hi) * 0.5;
+        self.lo = self.lo.min(lo);
+        self.hi = self.hi.max(hi);
+        self.clo = self.clo.min(c);
+        self.chi = self.chi.max(c);
+    }
+
+    fn boxes(&self) -> (Aabb, Aabb) {
+        (
+            Aabb::new(self.lo.into(), self.hi.into()),
+            Aabb::new(self.clo.into(), self.chi.into()),
+        )
+    }
+}
+
+/// In-place partition: items for which `left` holds first. Returns their
+/// count and both sides' bounds and centroid bounds, gathered in the same
+/// pass (a second pass over a large range costs as much as the partition).
+fn partition(
+    v: &mut [PrimRef],
+    left: impl Fn(&PrimRef) -> bool,
+) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
+    let (mut l, mut r) = (Acc::new(), Acc::new());
+    let (mut i, mut j) = (0, v.len());
+    loop {
+        while i < j && left(&v[i]) {
+            l.add(&v[i]);
+            i += 1;
+        }
+        while i < j && !left(&v[j - 1]) {
+            r.add(&v[j - 1]);
+            j -= 1;
+        }
+        if i >= j {
+            return (i, l.boxes(), r.boxes());
+        }
+        v.swap(i, j - 1);
+        l.add(&v[i]);
+        r.add(&v[j - 1]);
+        i += 1;
+        j -= 1;
+    }
+}
+
+/// Turns the leaves' item ranges into ranges of [`Tri4`] blocks and fills
+/// the blocks (leaves in item order, so each leaf's blocks are contiguous).
+fn fill_leaves<S: Source>(nodes: &mut [Node4], refs: &[PrimRef], src: &S) -> Vec<Tri4> {
+    // Items per leaf, at the leaf's first item.
+    let mut leaf_len = vec![0u8; refs.len()];
+    for n in nodes.iter() {
+        for &c in &n.child {
+            if is_leaf(c) && c != EMPTY {
+                let (s, k) = leaf_range(c);
+                leaf_len[s] = k as u8;
+            }
+        }
+    }
+    // Leaves in item order with their first block, and every block's
+    // items.
+    let mut first_block = vec![0u32; refs.len()];
+    let mut block_items: Vec<(u32, u8)> = Vec::with_capacity(refs.len() / 3);
+    for (s, &k) in leaf_len.iter().enumerate() {
+        if k > 0 {
+            first_block[s] = block_items.len() as u32;
+            for b in (0..k).step_by(4) {
+                block_items.push((s as u32 + b as u32, (k - b).min(4)));
+            }
+        }
+    }
+    nodes.par_iter_mut().for_each(|n| {
+        for c in &mut n.child {
+            if is_leaf(*c) && *c != EMPTY {
+                let (s, k) = leaf_range(*c);
+                *c = leaf(first_block[s] as usize, k.div_ceil(4));
+            }
+        }
+    });
+    block_items
+        .par_iter()
+        .with_min_len(1024)
+        .map(|&(s, k)| block(&refs[s as usize..s as usize + k as usize], src))
+        .collect()
+}
+
+/// One block of up to four items.
+fn block<S: Source>(items: &[PrimRef], src: &S) -> Tri4 {
+    let mut b = Tri4::EMPTY;
+    for (lane, r) in items.iter().enumerate() {
+        if r.other != 0 {
+            b.ids[lane] = r.id | OTHER;
+            continue;
+        }
+        b.ids[lane] = r.id;
+        if let Item::Triangle(v) = src.item(r.id) {
+            for (k, p) in v.iter().enumerate() {
+                for a in 0..3 {
+                    b.v[k][a][lane] = p[a];
+                }
+            }
+        }
+    }
+    b
+}

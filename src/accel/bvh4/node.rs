@@ -1,0 +1,136 @@
+//! The fast BVH's memory layout: 4-wide nodes with their children's boxes in
+//! structure-of-arrays form, and leaves of triangles four at a time.
+
+use glam::Vec4;
+
+/// A child reference: an inner node's index, or a leaf (high bit set) whose
+/// low 28 bits are its first [`Tri4`] block and bits 28–30 its block count
+/// minus one.
+pub(crate) type ChildRef = u32;
+
+/// The high bit of a [`ChildRef`]: a leaf.
+pub(crate) const LEAF: u32 = 1 << 31;
+/// An unused child slot (its box is empty, so no ray ever follows it).
+pub(crate) const EMPTY: ChildRef = u32::MAX;
+/// Bits for a leaf's first block.
+pub(crate) const START_BITS: u32 = 28;
+/// Most items one leaf holds (two blocks of four).
+pub(crate) const MAX_LEAF_ITEMS: usize = 8;
+
+/// A leaf reference: `count` (1..=8) blocks or items from `start`.
+#[inline]
+pub(crate) fn leaf(start: usize, count: usize) -> ChildRef {
+    debug_assert!(start < 1 << START_BITS && (1..=8).contains(&count));
+    LEAF | ((count as u32 - 1) << START_BITS) | start as u32
+}
+
+/// The `(start, count)` of a leaf reference.
+#[inline]
+pub(crate) fn leaf_range(r: ChildRef) -> (usize, usize) {
+    (
+        (r & ((1 << START_BITS) - 1)) as usize,
+        (((r >> START_BITS) & 7) + 1) as usize,
+    )
+}
+
+/// Whether a reference is a leaf (or [`EMPTY`], which is never followed).
+#[inline]
+pub(crate) fn is_leaf(r: ChildRef) -> bool {
+    r & LEAF != 0
+}
+
+/// A node with up to four children. `planes` holds the children's boxes as
+/// `[min x, min y, min z, max x, max y, max z]`, one lane per child, so that
+/// one ray is tested against all four boxes with a handful of 4-lane
+/// operations; a ray's octant picks which of min/max is the near plane.
+///
+/// 112 bytes, aligned to 128 (two cache lines, never straddling a third):
+/// the binary BVH's 32-byte nodes straddle lines and need four times as many
+/// visits.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Node4 {
+    /// Children's boxes, padded by the scene margin.
+    pub planes: [Vec4; 6],
+    /// Children: node indices or leaf references.
+    pub child: [ChildRef; 4],
+}
+
+impl Node4 {
+    /// A node whose four slots are empty (empty boxes: `min > max`).
+    pub const EMPTY: Node4 = Node4 {
+        planes: [
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+        ],
+        child: [EMPTY; 4],
+    };
+
+    /// Sets slot `i` to `r` with the box `[lo, hi]`.
+    pub fn set(&mut self, i: usize, r: ChildRef, lo: glam::Vec3, hi: glam::Vec3) {
+        for a in 0..3 {
+            self.planes[a][i] = lo[a];
+            self.planes[a + 3][i] = hi[a];
+        }
+        self.child[i] = r;
+    }
+}
+
+/// An item id flag marking a lane that is not a triangle (its vertices are
+/// NaN): the leaf test skips it, and the item is tested through the
+/// aggregate's fallback (spheres, transformed shapes).
+pub(crate) const OTHER: u32 = 1 << 31;
+/// The id of an unused lane (NaN vertices too).
+pub(crate) const NO_ITEM: u32 = u32::MAX;
+
+/// Four triangles, vertex coordinates in structure-of-arrays form:
+/// `v[vertex][axis]` holds that coordinate of the four triangles (160 bytes).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct Tri4 {
+    /// `v[k][a]`: coordinate `a` of vertex `k`, one lane per triangle.
+    pub v: [[Vec4; 3]; 3],
+    /// Item ids (primitive indices), [`OTHER`]-flagged or [`NO_ITEM`].
+    pub ids: [u32; 4],
+}
+
+impl Tri4 {
+    /// A block with every lane unused.
+    pub const EMPTY: Tri4 = Tri4 {
+        v: [[Vec4::NAN; 3]; 3],
+        ids: [NO_ITEM; 4],
+    };
+
+    /// Whether some lane holds a non-triangle item.
+    #[inline]
+    pub fn has_other(&self) -> bool {
+        self.ids.iter().any(|&id| id != NO_ITEM && id & OTHER != 0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn leaf_references_round_trip() {
+        for (s, c) in [(0, 1), (12345, 8), ((1 << START_BITS) - 1, 3)] {
+            let r = leaf(s, c);
+            assert!(is_leaf(r));
+            assert_eq!(leaf_range(r), (s, c));
+        }
+        assert!(!is_leaf(7));
+        assert!(is_leaf(EMPTY));
+    }
+
+    #[test]
+    fn layout_is_cache_friendly() {
+        assert_eq!(std::mem::size_of::<Node4>(), 128);
+        assert_eq!(std::mem::align_of::<Node4>(), 64);
+        assert_eq!(std::mem::size_of::<Tri4>(), 160);
+    }
+}

@@ -1,0 +1,289 @@
+//! Closest-hit and any-hit traversal: per-ray constants computed once, four
+//! boxes per node step, nearest child first, blocks of four triangles per leaf.
+
+use super::node::{is_leaf, leaf_range, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
+use crate::math::{Ray, Vec3};
+use crate::shape::{intersect_triangle, WatertightRay};
+use crate::stats::TraversalStats;
+use glam::Vec4;
+
+/// Entries of the traversal stack: the builder bounds the tree's depth so
+/// that at most `3 · depth + 1` entries are ever pending (see `build.rs`).
+pub(crate) const STACK: usize = 64;
+
+/// How items that are not triangles are tested (the world's spheres and
+/// transformed shapes); a mesh has none.
+pub trait Fallback {
+    /// The hit parameter of item `id` in `(tmin, tmax)`.
+    fn intersect(&self, id: u32, ray: &Ray, tmin: f32, tmax: f32) -> Option<f32>;
+}
+
+/// No items but triangles.
+pub struct TrianglesOnly;
+
+impl Fallback for TrianglesOnly {
+    #[inline]
+    fn intersect(&self, _: u32, _: &Ray, _: f32, _: f32) -> Option<f32> {
+        None
+    }
+}
+
+/// Everything a ray needs at every node and leaf, computed once per ray.
+pub(crate) struct RayData {
+    pub ray: Ray,
+    /// Origin, splatted per axis.
+    org: [Vec4; 3],
+    /// `1 / dir` per axis (±inf for a zero component), splatted.
+    inv: [Vec4; 3],
+    /// Index into `Node4::planes` of the near and far plane per axis (the
+    /// ray's octant).
+    near: [usize; 3],
+    far: [usize; 3],
+    /// The watertight test's per-ray permutation and shear.
+    wt: WatertightRay,
+}
+
+impl RayData {
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let o = ray.origin;
+        let inv = Vec3::ONE / ray.dir;
+        let neg = |a: usize| usize::from(inv[a] < 0.0 || (inv[a] == 0.0 && ray.dir[a] < 0.0));
+        RayData {
+            ray: *ray,
+            org: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
+            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
+            far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
+            wt: WatertightRay::new(ray),
+        }
+    }
+
+    /// The slab test against a node's four boxes: a bit mask of the boxes
+    /// the ray meets within `[tmin, tmax]`, and their entry distances.
+    ///
+    /// A NaN slab distance (`0 · inf`: an origin exactly on a plane of a box
+    /// the ray runs parallel to) must not reject the box: `max`/`min` are
+    /// written with the accumulator second, and glam's SSE `max`/`min`
+    /// return their second operand when either is NaN, so such a slab is
+    /// ignored (the box is kept: conservative, never a missed hit).
+    #[inline(always)]
+    fn boxes(&self, n: &Node4, tmin: Vec4, tmax: Vec4) -> (u32, Vec4) {
+        let p = &n.planes;
+        let tnx = (p[self.near[0]] - self.org[0]) * self.inv[0];
+        let tny = (p[self.near[1]] - self.org[1]) * self.inv[1];
+        let tnz = (p[self.near[2]] - self.org[2]) * self.inv[2];
+        let tfx = (p[self.far[0]] - self.org[0]) * self.inv[0];
+        let tfy = (p[self.far[1]] - self.org[1]) * self.inv[1];
+        let tfz = (p[self.far[2]] - self.org[2]) * self.inv[2];
+        let tn = tnx.max(tny.max(tnz.max(tmin)));
+        let tf = tfx.min(tfy.min(tfz.min(tmax)));
+        (tn.cmple(tf).bitmask(), tn)
+    }
+
+    /// The watertight test (`shape::triangle::intersect_triangle`) on the
+    /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)` and
+    /// their parameters. Each lane calls the very function brute force calls,
+    /// so results are bit-identical; unused and non-triangle lanes (NaN
+    /// vertices) are skipped by their ids.
+    #[inline(always)]
+    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, Vec4) {
+        let mut mask = 0;
+        let mut t = Vec4::ZERO;
+        for lane in 0..4 {
+            if b.ids[lane] & OTHER != 0 {
+                continue; // NO_ITEM has the flag too
+            }
+            let p = |k: usize| Vec3::new(b.v[k][0][lane], b.v[k][1][lane], b.v[k][2][lane]);
+            if let Some(h) = intersect_triangle(&self.wt, p(0), p(1), p(2), tmin, tmax) {
+                mask |= 1 << lane;
+                t[lane] = h.t;
+            }
+        }
+        (mask, t)
+    }
+}
+
+/// Pushes the children in `mask` (at least two) far to near and returns the
+/// nearest, so that the nearest is visited first and the others are popped
+/// in order of distance.
+#[inline(always)]
+fn order(
+    node: &Node4,
+    mut mask: u32,
+    dist: Vec4,
+    stack: &mut [(u32, f32); STACK],
+    sp: &mut usize,
+) -> u32 {
+    let mut kids = [(0u32, 0f32); 4];
+    let mut k = 0;
+    while mask != 0 {
+        let i = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        // Insertion sort, far first.
+        let e = (node.child[i], dist[i]);
+        let mut j = k;
+        while j > 0 && kids[j - 1].1 < e.1 {
+            kids[j] = kids[j - 1];
+            j -= 1;
+        }
+        kids[j] = e;
+        k += 1;
+    }
+    for &e in &kids[..k - 1] {
+        stack[*sp] = e;
+        *sp += 1;
+    }
+    kids[k - 1].0
+}
+
+/// The closest hit: `(t, item id)`.
+#[inline]
+pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
+    nodes: &[Node4],
+    tris: &[Tri4],
+    fallback: &F,
+    rd: &RayData,
+    tmin: f32,
+    tmax: f32,
+    stats: &mut S,
+) -> Option<(f32, u32)> {
+    if nodes.is_empty() {
+        return None;
+    }
+    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let mut best: Option<(f32, u32)> = None;
+    let mut tmax = tmax;
+    let tmin4 = Vec4::splat(tmin);
+    let mut stack = [(0u32, 0f32); STACK];
+    let mut sp = 0usize;
+    let mut cur = 0u32;
+    loop {
+        if !is_leaf(cur) {
+            let node = &nodes[cur as usize];
+            if S::ENABLED {
+                n_nodes += 1;
+            }
+            let (mask, dist) = rd.boxes(node, tmin4, Vec4::splat(tmax));
+            if mask != 0 {
+                cur = if mask & (mask - 1) == 0 {
+                    node.child[mask.trailing_zeros() as usize]
+                } else {
+                    order(node, mask, dist, &mut stack, &mut sp)
+                };
+                continue;
+            }
+        } else if cur != EMPTY {
+            let (start, count) = leaf_range(cur);
+            for b in &tris[start..start + count] {
+                if S::ENABLED {
+                    n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
+                }
+                let (mut mask, t) = rd.triangles(b, tmin, tmax);
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if t[i] < tmax {
+                        tmax = t[i];
+                        best = Some((t[i], b.ids[i]));
+                    }
+                }
+                if b.has_other() {
+                    for &id in &b.ids {
+                        if id != NO_ITEM && id & OTHER != 0 {
+                            let id = id & !OTHER;
+                            if let Some(t) = fallback.intersect(id, &rd.ray, tmin, tmax) {
+                                tmax = t;
+                                best = Some((t, id));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Pop the nearest pending child that can still hold a closer hit.
+        loop {
+            if sp == 0 {
+                stats.add(n_nodes, n_tests);
+                return best;
+            }
+            sp -= 1;
+            let (r, d) = stack[sp];
+            if d <= tmax {
+                cur = r;
+                break;
+            }
+        }
+    }
+}
+
+/// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first hit.
+#[inline]
+pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
+    nodes: &[Node4],
+    tris: &[Tri4],
+    fallback: &F,
+    rd: &RayData,
+    tmin: f32,
+    tmax: f32,
+    stats: &mut S,
+) -> bool {
+    if nodes.is_empty() {
+        return false;
+    }
+    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let (tmin4, tmax4) = (Vec4::splat(tmin), Vec4::splat(tmax));
+    let mut stack = [0u32; STACK];
+    let mut sp = 0usize;
+    let mut cur = 0u32;
+    let hit = 'walk: loop {
+        if !is_leaf(cur) {
+            let node = &nodes[cur as usize];
+            if S::ENABLED {
+                n_nodes += 1;
+            }
+            // No ordering: any occluder ends the walk, and sorting costs
+            // more than it saves for shadow rays.
+            let (mut mask, _) = rd.boxes(node, tmin4, tmax4);
+            if mask != 0 {
+                let first = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                while mask != 0 {
+                    stack[sp] = node.child[mask.trailing_zeros() as usize];
+                    sp += 1;
+                    mask &= mask - 1;
+                }
+                cur = node.child[first];
+                continue;
+            }
+        } else if cur != EMPTY {
+            let (start, count) = leaf_range(cur);
+            for b in &tris[start..start + count] {
+                if S::ENABLED {
+                    n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
+                }
+                if rd.triangles(b, tmin, tmax).0 != 0 {
+                    break 'walk true;
+                }
+                if b.has_other()
+                    && b.ids.iter().any(|&id| {
+                        id != NO_ITEM
+                            && id & OTHER != 0
+                            && fallback
+                                .intersect(id & !OTHER, &rd.ray, tmin, tmax)
+                                .is_some()
+                    })
+                {
+                    break 'walk true;
+                }
+            }
+        }
+        if sp == 0 {
+            break false;
+        }
+        sp -= 1;
+        cur = stack[sp];
+    };
+    stats.add(n_nodes, n_tests);
+    hit
+}

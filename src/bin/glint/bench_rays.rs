@@ -1,0 +1,211 @@
+//! `glint bench rays MESH.obj PREFIX`: the fast BVH against the anchors'
+//! ray files (`../shared/anchors`: the same triangles and rays Embree's
+//! harness traces), with the checksums Embree prints, so that a ratio of the
+//! two throughputs compares equal work.
+//!
+//! Timing follows Embree's harness: one warm-up pass, then the best of three
+//! passes; rays are handed out in chunks of 4096 to the worker threads.
+
+use glint::format::obj::load_obj;
+use glint::math::{Ray, Vec3};
+use glint::query::MeshScene;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Settings of `glint bench rays`.
+pub struct RaysArgs {
+    /// The OBJ mesh.
+    pub mesh: PathBuf,
+    /// Ray files are `PREFIX.primary.rays`, `.incoherent.rays`, `.shadow.rays`.
+    pub prefix: String,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Print one JSON object instead of text.
+    pub json: bool,
+    /// Also count nodes visited and triangles tested per ray (an extra,
+    /// untimed pass).
+    pub stats: bool,
+}
+
+/// One ray of a ray file: origin, tmin, direction, tmax.
+struct RayRec {
+    ray: Ray,
+    tmin: f32,
+    tmax: f32,
+}
+
+/// Reads a ray file: a little-endian `u64` count, then `count` records of
+/// eight `f32` (`ox oy oz tmin dx dy dz tmax`).
+fn read_rays(path: &Path) -> Result<Vec<RayRec>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bad = || {
+        format!(
+            "{}: not a ray file (count and 32-byte records)",
+            path.display()
+        )
+    };
+    let head: [u8; 8] = bytes
+        .get(..8)
+        .ok_or_else(bad)?
+        .try_into()
+        .map_err(|_| bad())?;
+    let n = usize::try_from(u64::from_le_bytes(head)).map_err(|_| bad())?;
+    let body = &bytes[8..];
+    if body.len() / 32 != n || body.len() % 32 != 0 {
+        return Err(bad());
+    }
+    Ok(body
+        .chunks_exact(32)
+        .map(|r| {
+            let f =
+                |k: usize| f32::from_le_bytes([r[4 * k], r[4 * k + 1], r[4 * k + 2], r[4 * k + 3]]);
+            RayRec {
+                ray: Ray::new(Vec3::new(f(0), f(1), f(2)), Vec3::new(f(4), f(5), f(6))),
+                tmin: f(3),
+                tmax: f(7),
+            }
+        })
+        .collect())
+}
+
+/// Closest-hit or any-hit results of one pass.
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    hits: u64,
+    tsum: f64,
+}
+
+impl std::ops::Add for Sums {
+    type Output = Sums;
+    fn add(self, o: Sums) -> Sums {
+        Sums {
+            hits: self.hits + o.hits,
+            tsum: self.tsum + o.tsum,
+        }
+    }
+}
+
+/// Rays handed to a thread at a time (as Embree's harness does).
+const CHUNK: usize = 4096;
+
+fn pass(scene: &MeshScene, rays: &[RayRec], shadow: bool) -> Sums {
+    rays.par_chunks(CHUNK)
+        .map(|chunk| {
+            let mut s = Sums::default();
+            for r in chunk {
+                if shadow {
+                    s.hits += u64::from(scene.occluded(&r.ray, r.tmin, r.tmax));
+                } else if let Some(h) = scene.intersect(&r.ray, r.tmin, r.tmax) {
+                    s.hits += 1;
+                    s.tsum += f64::from(h.t);
+                }
+            }
+            s
+        })
+        .reduce(Sums::default, |a, b| a + b)
+}
+
+/// Warm-up, then the best of three: Mrays/s and the checksums.
+fn measure(scene: &MeshScene, rays: &[RayRec], shadow: bool) -> (f64, Sums) {
+    let sums = pass(scene, rays, shadow);
+    let best = (0..3)
+        .map(|_| {
+            let t = Instant::now();
+            pass(scene, rays, shadow);
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min);
+    (rays.len() as f64 / best / 1e6, sums)
+}
+
+/// Runs the benchmark and prints its report.
+pub fn run(a: &RaysArgs) -> Result<(), String> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| e.to_string())?;
+    pool.install(|| run_in_pool(a))
+}
+
+fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
+    let t = Instant::now();
+    let mesh = load_obj(&a.mesh).map_err(|e| e.render())?;
+    let load_ms = t.elapsed().as_secs_f64() * 1e3;
+    let rays = |kind: &str| read_rays(Path::new(&format!("{}.{kind}.rays", a.prefix)));
+    let (primary, incoherent, shadow) = (rays("primary")?, rays("incoherent")?, rays("shadow")?);
+    // Best of three builds (Embree's harness reports its best of five).
+    let mut build_ms = f64::INFINITY;
+    let mut scene = None;
+    for _ in 0..3 {
+        drop(scene.take());
+        let t = Instant::now();
+        let s = MeshScene::new(&mesh.positions, &mesh.triangles).map_err(|e| e.to_string())?;
+        build_ms = build_ms.min(t.elapsed().as_secs_f64() * 1e3);
+        scene = Some(s);
+    }
+    let scene = scene.expect("built three times");
+    let tris = scene.triangle_count();
+    let bytes = scene.memory_bytes() as f64 / tris.max(1) as f64;
+    let (mp, p) = measure(&scene, &primary, false);
+    let (mi, i) = measure(&scene, &incoherent, false);
+    let (ms, s) = measure(&scene, &shadow, true);
+    let threads = rayon::current_num_threads();
+    if a.stats {
+        for (name, rays, shadow) in [
+            ("primary", &primary, false),
+            ("incoherent", &incoherent, false),
+            ("shadow", &shadow, true),
+        ] {
+            let mut c = glint::stats::Counters::default();
+            for r in rays.iter() {
+                if shadow {
+                    scene.occluded_with(&r.ray, r.tmin, r.tmax, &mut c);
+                } else {
+                    scene.intersect_with(&r.ray, r.tmin, r.tmax, &mut c);
+                }
+            }
+            let n = rays.len().max(1) as f64;
+            eprintln!(
+                "  {name:10} {:.1} nodes/ray, {:.1} triangles tested/ray",
+                c.nodes_visited as f64 / n,
+                c.intersection_tests as f64 / n
+            );
+        }
+    }
+    if a.json {
+        let v = serde_json::json!({
+            "triangles": tris,
+            "threads": threads,
+            "load_ms": load_ms,
+            "build_ms": build_ms,
+            "bytes_per_triangle": bytes,
+            "primary": {"mrays": mp, "hits": p.hits, "tsum": p.tsum},
+            "incoherent": {"mrays": mi, "hits": i.hits, "tsum": i.tsum},
+            "shadow": {"mrays": ms, "occluded": s.hits},
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "# glint bvh4 mesh={} tris={tris} threads={threads} (obj load {load_ms:.0} ms)",
+            a.mesh.display()
+        );
+        println!(
+            "build: best {build_ms:.1} ms, {bytes:.1} bytes/triangle (nodes + triangle blocks)"
+        );
+        println!(
+            "  primary    {mp:8.2} Mrays/s  hits={} tsum={:.6}",
+            p.hits, p.tsum
+        );
+        println!(
+            "  incoherent {mi:8.2} Mrays/s  hits={} tsum={:.6}",
+            i.hits, i.tsum
+        );
+        println!(
+            "  shadow     {ms:8.2} Mrays/s  occluded={} of {}",
+            s.hits,
+            shadow.len()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,198 @@
+//! Ray queries for embedders and benchmarks: a triangle mesh from raw vertex
+//! and index buffers, behind the fast BVH, queried without a counters
+//! argument (statistics are opt-in through [`MeshScene::intersect_with`]).
+//!
+//! ```
+//! use glint::math::{Ray, Vec3};
+//! use glint::query::MeshScene;
+//! let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+//! let scene = MeshScene::new(&vertices, &[[0, 1, 2]]).unwrap();
+//! let ray = Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::NEG_Z);
+//! let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+//! assert_eq!((hit.t, hit.triangle), (1.0, 0));
+//! assert!(scene.occluded(&ray, 0.0, 2.0));
+//! ```
+
+use crate::accel::bvh4::{Bvh4, TrianglesOnly};
+use crate::math::{Ray, Vec3};
+use crate::stats::{NoStats, TraversalStats};
+
+/// What a query hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshHit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Index of the triangle in the index buffer.
+    pub triangle: u32,
+}
+
+/// Why buffers were refused.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    /// An index refers past the vertex buffer.
+    #[error("triangle {triangle} refers to vertex {index}, but there are {vertices} vertices")]
+    IndexOutOfRange {
+        /// The triangle.
+        triangle: usize,
+        /// The bad index.
+        index: u32,
+        /// Length of the vertex buffer.
+        vertices: usize,
+    },
+    /// A vertex coordinate is infinite or NaN.
+    #[error("vertex {0} has a coordinate that is not finite")]
+    NotFinite(usize),
+    /// More triangles than the BVH addresses.
+    #[error("{0} triangles: at most 2^28 are supported")]
+    TooLarge(usize),
+}
+
+/// A triangle mesh ready for ray queries. It keeps its own copy of the
+/// triangles (in the BVH's leaf blocks), so the caller's buffers may be
+/// dropped after [`MeshScene::new`].
+pub struct MeshScene {
+    bvh: Bvh4,
+    triangles: usize,
+}
+
+impl MeshScene {
+    /// Builds the BVH (in parallel on rayon's pool) over `indices`, triangles
+    /// of `vertices`. Degenerate triangles are kept out (never hit).
+    pub fn new<V>(vertices: &[V], indices: &[[u32; 3]]) -> Result<Self, MeshError>
+    where
+        V: Copy + Into<Vec3> + Sync,
+    {
+        if indices.len() >= 1 << 28 {
+            return Err(MeshError::TooLarge(indices.len()));
+        }
+        if let Some(i) = vertices.iter().position(|&v| !v.into().is_finite()) {
+            return Err(MeshError::NotFinite(i));
+        }
+        for (triangle, t) in indices.iter().enumerate() {
+            if let Some(&index) = t.iter().find(|&&i| i as usize >= vertices.len()) {
+                return Err(MeshError::IndexOutOfRange {
+                    triangle,
+                    index,
+                    vertices: vertices.len(),
+                });
+            }
+        }
+        Ok(MeshScene {
+            bvh: Bvh4::from_mesh(vertices, indices),
+            triangles: indices.len(),
+        })
+    }
+
+    /// Closest hit with `tmin < t < tmax`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<MeshHit> {
+        self.intersect_with(ray, tmin, tmax, &mut NoStats)
+    }
+
+    /// Whether anything lies on the ray with `tmin < t < tmax` (stops at the
+    /// first hit).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+        self.occluded_with(ray, tmin, tmax, &mut NoStats)
+    }
+
+    /// [`MeshScene::intersect`], counting nodes and tests into `stats`
+    /// (e.g. a `stats::Counters`).
+    #[inline]
+    pub fn intersect_with<S: TraversalStats>(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        stats: &mut S,
+    ) -> Option<MeshHit> {
+        self.bvh
+            .closest(&TrianglesOnly, ray, tmin, tmax, stats)
+            .map(|(t, triangle)| MeshHit { t, triangle })
+    }
+
+    /// [`MeshScene::occluded`], counting into `stats`.
+    #[inline]
+    pub fn occluded_with<S: TraversalStats>(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        stats: &mut S,
+    ) -> bool {
+        self.bvh.any(&TrianglesOnly, ray, tmin, tmax, stats)
+    }
+
+    /// Triangles in the index buffer it was built from.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles
+    }
+
+    /// Bytes of the structure: BVH nodes and the triangle blocks (which hold
+    /// every triangle's vertices; nothing else is kept).
+    pub fn memory_bytes(&self) -> usize {
+        self.bvh.memory_bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shape::Triangle;
+
+    #[test]
+    fn bad_buffers_are_refused() {
+        let v = [[0.0f32; 3]; 3];
+        assert!(matches!(
+            MeshScene::new(&v, &[[0, 1, 3]]),
+            Err(MeshError::IndexOutOfRange { index: 3, .. })
+        ));
+        let v = [[0.0, f32::NAN, 0.0]];
+        assert_eq!(MeshScene::new(&v, &[]).err(), Some(MeshError::NotFinite(0)));
+    }
+
+    /// Same hits as testing every triangle with the shape's own test.
+    #[test]
+    fn agrees_with_every_triangle_tested() {
+        let mut s = 12345u64;
+        let mut f = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut vertices = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..3000u32 {
+            let c = Vec3::new(f(), f(), f()) * 4.0;
+            for _ in 0..3 {
+                vertices.push(c + Vec3::new(f(), f(), f()) * 0.3);
+            }
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let scene = MeshScene::new(&vertices, &indices).unwrap();
+        let tris: Vec<Triangle> = indices
+            .iter()
+            .map(|t| {
+                Triangle::new(
+                    vertices[t[0] as usize],
+                    vertices[t[1] as usize],
+                    vertices[t[2] as usize],
+                )
+            })
+            .collect();
+        for _ in 0..2000 {
+            let ray = Ray::new(Vec3::new(f(), f(), f()) * 6.0, Vec3::new(f(), f(), f()));
+            let mut want: Option<(f32, u32)> = None;
+            for (i, t) in tris.iter().enumerate() {
+                let tmax = want.map_or(f32::INFINITY, |w| w.0);
+                if let Some(t) = t.intersect(&ray, 0.0, tmax) {
+                    want = Some((t, i as u32));
+                }
+            }
+            let got = scene.intersect(&ray, 0.0, f32::INFINITY);
+            assert_eq!(want.map(|w| w.0), got.map(|h| h.t), "{ray:?}");
+            assert_eq!(want.is_some(), scene.occluded(&ray, 0.0, f32::INFINITY));
+        }
+    }
+}
