@@ -838,6 +838,13 @@ fn moving_objects_and_timed_rays() {
         AccelKind::Bvh(Split::Sah),
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
+        AccelKind::Bvh4,
+        AccelKind::BvhHierarchy,
+        AccelKind::OctreeInner,
+        AccelKind::NestedGrid {
+            threshold: 16,
+            depth: 2,
+        },
     ];
     let mut rays = 0;
     let mut hits = 0;
