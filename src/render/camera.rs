@@ -1,5 +1,7 @@
+use super::SampleStream;
+use crate::light::area::concentric_disk;
 use crate::math::{Ray, Vec2, Vec3};
-use crate::scene::Camera;
+use crate::scene::{Camera, Lens};
 
 /// A camera ready to make rays: an orthonormal frame built from the scene's
 /// direction and approximate up vector.
@@ -12,6 +14,7 @@ pub struct CameraModel {
     /// Orthographic: world size of the screen; perspective: `2·tan(angle/2)`.
     span: f32,
     perspective: bool,
+    lens: Lens,
 }
 
 impl CameraModel {
@@ -52,7 +55,47 @@ impl CameraModel {
             up,
             span,
             perspective,
+            lens: Lens::default(),
         }
+    }
+
+    /// The same camera with a thin lens and shutter.
+    pub fn with_lens(self, lens: Lens) -> Self {
+        Self { lens, ..self }
+    }
+
+    /// The camera ray of one camera sample through screen point `s`: its
+    /// time is the stream's next 1-D value mapped onto the shutter interval
+    /// (only when the shutter is open for a while), its start the next 2-D
+    /// value mapped onto the lens (only with an aperture).
+    ///
+    /// Thin lens: every ray through screen point `s` passes through the point
+    /// where the pinhole ray meets the focus plane (at `focus_distance` along
+    /// the viewing direction), so that plane is sharp and a point at depth
+    /// `z` spreads over a disk of radius `aperture · |z − f| / z` on it.
+    pub fn sample_ray(&self, s: Vec2, stream: &mut SampleStream) -> Ray {
+        let mut ray = self.ray(s);
+        let [open, close] = self.lens.shutter;
+        ray.time = if self.lens.has_motion_blur() {
+            open + (close - open) * stream.next_1d()
+        } else {
+            open
+        };
+        if self.lens.has_depth_of_field() {
+            let l = concentric_disk(stream.next_2d()) * self.lens.aperture;
+            let offset = l.x * self.horizontal + l.y * self.up;
+            if self.perspective {
+                let focus = ray.at(self.lens.focus_distance / ray.dir.dot(self.direction));
+                ray.origin += offset;
+                ray.dir = (focus - ray.origin).normalize();
+            } else {
+                // Parallel rays: the lens tilts them towards the focus plane.
+                let focus = ray.at(self.lens.focus_distance);
+                ray.origin += offset;
+                ray.dir = (focus - ray.origin).normalize();
+            }
+        }
+        ray
     }
 
     /// The ray through screen point `s` in `[0,1]²` (the square spanned by

@@ -340,7 +340,7 @@ fn render_bands<I: Integrator>(
                                     (o, filter.weight(o.x - 0.5, o.y - 0.5))
                                 }
                             };
-                            let ray = camera.ray(screen_point(i, j, o, w, h));
+                            let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
                             let (c, hit) = integrator.li(
                                 world,
                                 &ray,
@@ -433,7 +433,7 @@ fn render_tile<I: Integrator>(
             for k in 0..sampler.spp() {
                 let mut stream = sampler.stream((i, j), k);
                 let o = stream.next_2d();
-                let ray = camera.ray(screen_point(i, j, o, w, h));
+                let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
                 let (c, hit) = integrator.li(
                     world,
                     &ray,

@@ -216,6 +216,31 @@ struct RenderArgs {
     /// The course's filter view: the filter's weights around the central pixel, zoomed.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_filter: Option<Vec<String>>,
+    /// Shadow rays per area light per shaded point (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    shadow_samples: Option<u32>,
+    /// Rays per glossy lobe (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    glossy_samples: Option<u32>,
+    /// Shutter instants per pixel sample: camera rays = spp x time x lens (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    time_samples: Option<u32>,
+    /// Lens points per pixel sample: camera rays = spp x time x lens (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    lens_samples: Option<u32>,
+    /// Ambient-occlusion rays per shaded point (overrides the scene's AmbientOcclusion).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    ao_samples: Option<u32>,
+    /// What to compute: whitted (shaded image) or ao (grey ambient-occlusion image).
+    #[arg(long, value_enum, default_value_t = IntegratorName::Whitted)]
+    integrator: IntegratorName,
+}
+
+/// Command-line names of the integrators.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum IntegratorName {
+    Whitted,
+    Ao,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -365,6 +390,14 @@ fn render(a: RenderArgs) -> ExitCode {
         });
     }
     job.samples_image = a.samples_image;
+    job.effect_samples = glint::job::SampleOverrides {
+        shadow: a.shadow_samples,
+        glossy: a.glossy_samples,
+        time: a.time_samples,
+        lens: a.lens_samples,
+        ao: a.ao_samples,
+    };
+    job.ao_image = a.integrator == IntegratorName::Ao;
     job.cost_image = a.cost_image;
     let size = (job.width, job.height);
     let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
