@@ -305,7 +305,7 @@ fn render_bands<I: Integrator>(
                             let before = counters;
                             let mut stream = sampler.stream((i, j), 0);
                             stream.skip();
-                            let ray = camera.ray(screen_point(i, j, o, w, h));
+                            let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
                             let (c, hit) = integrator.li(
                                 world,
                                 &ray,
