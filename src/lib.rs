@@ -12,6 +12,7 @@ pub mod piece;
 pub mod primitive;
 pub mod query;
 pub mod render;
+pub mod sampler;
 pub mod scene;
 pub mod shape;
 pub mod stats;

@@ -6,7 +6,7 @@
 use super::{Integrator, RayKind, RayObserver};
 use crate::light::area::concentric_disk;
 use crate::math::{Ray, SurfacePoint, Vec2, Vec3};
-use crate::render::SampleStream;
+use crate::sampler::SampleStream;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 

@@ -13,7 +13,7 @@ pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
 pub use whitted::Whitted;
 
 use crate::math::{Ray, Vec3};
-use crate::render::SampleStream;
+use crate::sampler::SampleStream;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 

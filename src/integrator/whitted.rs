@@ -17,7 +17,7 @@ use crate::light::{incident, is_delta, sample_light};
 use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
 use crate::math::{Ray, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
-use crate::render::{SampleStream, Sampler};
+use crate::sampler::{SampleStream, Sampler};
 use crate::scene::Light;
 use crate::stats::Counters;
 use crate::world::{Hit, World};

@@ -10,14 +10,14 @@ pub mod film;
 mod filter;
 mod frame;
 pub mod legacy;
-pub mod sampler;
 pub mod views;
 
+pub use crate::sampler;
+pub use crate::sampler::{GridLayout, SampleStream, Sampler, SamplerKind};
 pub use adaptive::Adaptive;
 pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use filter::Filter;
 pub use frame::{Frame, PixelCost};
-pub use sampler::{GridLayout, SampleStream, Sampler, SamplerKind};
 
 use crate::integrator::{Integrator, NoObserver, Whitted};
 use crate::math::{Vec2, Vec3};
