@@ -2,6 +2,7 @@
 //! The binaries only translate their flags into a [`Job`].
 
 use crate::accel::AccelKind;
+use crate::animation::FrameTime;
 use crate::format::{load_scene_files, ParseError};
 use crate::integrator::{AmbientOcclusion, AoSettings, Whitted};
 use crate::limits;
@@ -68,6 +69,10 @@ pub struct Job {
     /// Render only this piece of the frame and write it as an EXR with a
     /// data window (`--tile I/N`, `--crop`); see [`crate::piece`].
     pub piece: Option<PieceSpec>,
+    /// Render this frame of the scene's animation (`--frame K --fps F`):
+    /// the shutter interval moves to start at `K / F`; see
+    /// [`crate::animation`].
+    pub frame: Option<FrameTime>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -256,6 +261,25 @@ impl Job {
             )));
         }
         Ok(())
+    }
+
+    /// This job for frame `f` of the scene's animation: [`Job::frame`] set,
+    /// and the last run of `#` in every output file name replaced by the
+    /// frame number ([`crate::animation::frame_path`]), so one command line
+    /// serves every frame of a job array.
+    pub fn at_frame(mut self, f: FrameTime) -> Self {
+        let k = f.index;
+        let name = |p: &mut PathBuf| *p = crate::animation::frame_path(p, k);
+        self.output.iter_mut().for_each(name);
+        self.normals.iter_mut().for_each(name);
+        self.samples_image.iter_mut().for_each(name);
+        self.cost_image.iter_mut().for_each(name);
+        self.stats_json.iter_mut().for_each(name);
+        self.depth.iter_mut().for_each(|d| name(&mut d.2));
+        self.samples_view.iter_mut().for_each(|v| name(&mut v.0));
+        self.filter_view.iter_mut().for_each(|v| name(&mut v.0));
+        self.frame = Some(f);
+        self
     }
 
     /// The hash of everything that decides the image (not the accelerator,
@@ -455,6 +479,7 @@ impl Job {
             samples_image: None,
             cost_image: None,
             piece: None,
+            frame: None,
             cancel: None,
             progress: false,
             stats_json: None,
@@ -541,10 +566,15 @@ impl Job {
             }
             None => scene,
         };
+        let mut scene = scene;
+        if let Some(f) = self.frame {
+            // Before the piece hash: pieces of different frames never merge.
+            scene.effects.lens.shutter = f.shutter(scene.effects.lens.shutter);
+        }
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
-        let camera = CameraModel::new(&world.camera).with_lens(scene.effects.lens);
+        let camera = CameraModel::of_world(&world, &scene.effects);
         let samples = self.effect_samples.apply(scene.effects.samples);
         let mut integrator = self.integrator;
         integrator.shadow_samples = samples.shadow;

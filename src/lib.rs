@@ -1,5 +1,6 @@
 //! glint: a teaching-grade, production-fast CPU ray tracer.
 pub mod accel;
+pub mod animation;
 pub mod format;
 pub mod integrator;
 pub mod job;

@@ -425,6 +425,18 @@ const CASES: &[Case] = &[
         "expected a shutter close time not before the open time, found '0.5'",
     ),
     case(
+        "camera_keyframe_order.txt",
+        8,
+        21,
+        "expected a keyframe time after the previous one (1), found '0.5'",
+    ),
+    case(
+        "camera_too_few_keyframes.txt",
+        9,
+        1,
+        "expected 3 keyframes (numKeyframes 3), found '}' after 2 keyframes",
+    ),
+    case(
         "keyframe_time_order.txt",
         13,
         25,

@@ -1,11 +1,13 @@
 use super::SampleStream;
 use crate::light::area::concentric_disk;
-use crate::math::{Ray, Vec2, Vec3};
+use crate::math::{Motion, Ray, Vec2, Vec3};
 use crate::scene::{Camera, Lens};
+use glam::DVec3;
+use std::sync::Arc;
 
 /// A camera ready to make rays: an orthonormal frame built from the scene's
-/// direction and approximate up vector.
-#[derive(Clone, Copy, Debug)]
+/// direction and approximate up vector; optionally moving.
+#[derive(Clone, Debug)]
 pub struct CameraModel {
     center: Vec3,
     direction: Vec3,
@@ -15,6 +17,57 @@ pub struct CameraModel {
     span: f32,
     perspective: bool,
     lens: Lens,
+    /// The moving camera's rig, if it moves.
+    rig: Option<Arc<Rig>>,
+}
+
+/// A moving camera: the rig's keyframed motion carries the camera's
+/// centre, direction and up, in world space, while the image is computed in
+/// rendering space (see [`crate::world`]).
+#[derive(Debug)]
+struct Rig {
+    /// The camera at the rig's rest pose, in rendering space.
+    base: Camera,
+    motion: Arc<Motion>,
+    /// Where the rendering-space origin lies in world space.
+    origin: DVec3,
+}
+
+impl Rig {
+    /// The camera at instant `time`. The pose is applied in f64 in world
+    /// space (rendering space plus `origin`), then moved back and rounded
+    /// once, so a scene far from the origin moves its camera as precisely
+    /// as one near it.
+    fn at(&self, time: f32) -> Camera {
+        let m = self.motion.matrix(time).as_dmat4();
+        let o = self.origin;
+        let point = |p: Vec3| (m.transform_point3(p.as_dvec3() + o) - o).as_vec3();
+        let vector = |v: Vec3| m.transform_vector3(v.as_dvec3()).as_vec3();
+        match self.base {
+            Camera::Orthographic {
+                center,
+                direction,
+                up,
+                size,
+            } => Camera::Orthographic {
+                center: point(center),
+                direction: vector(direction),
+                up: vector(up),
+                size,
+            },
+            Camera::Perspective {
+                center,
+                direction,
+                up,
+                angle_deg,
+            } => Camera::Perspective {
+                center: point(center),
+                direction: vector(direction),
+                up: vector(up),
+                angle_deg,
+            },
+        }
+    }
 }
 
 impl CameraModel {
@@ -56,6 +109,41 @@ impl CameraModel {
             span,
             perspective,
             lens: Lens::default(),
+            rig: None,
+        }
+    }
+
+    /// The camera a render of `world` uses: the scene's camera in rendering
+    /// space with the scene's lens and shutter, on its rig if it moves.
+    pub fn of_world(world: &crate::world::World, effects: &crate::scene::Effects) -> Self {
+        let cam = CameraModel::new(&world.camera).with_lens(effects.lens);
+        match &effects.camera_motion {
+            Some(m) => cam.with_motion(&world.camera, m.clone(), world.origin),
+            None => cam,
+        }
+    }
+
+    /// The same camera carried by a rig moving along `motion` (world space);
+    /// `cam` is the camera in rendering space (as [`CameraModel::new`] takes
+    /// it) and `origin` the rendering-space origin in world space. Each
+    /// camera ray then starts from the camera's pose at the ray's time.
+    pub fn with_motion(self, cam: &Camera, motion: Arc<Motion>, origin: DVec3) -> Self {
+        let rig = Rig {
+            base: cam.clone(),
+            motion,
+            origin,
+        };
+        Self {
+            rig: Some(Arc::new(rig)),
+            ..self
+        }
+    }
+
+    /// The camera at instant `time` (itself, unless it moves).
+    pub fn at_time(&self, time: f32) -> CameraModel {
+        match &self.rig {
+            Some(rig) => CameraModel::new(&rig.at(time)).with_lens(self.lens),
+            None => self.clone(),
         }
     }
 
@@ -74,13 +162,26 @@ impl CameraModel {
     /// the viewing direction), so that plane is sharp and a point at depth
     /// `z` spreads over a disk of radius `aperture · |z − f| / z` on it.
     pub fn sample_ray(&self, s: Vec2, stream: &mut SampleStream) -> Ray {
-        let mut ray = self.ray(s);
         let [open, close] = self.lens.shutter;
-        ray.time = if self.lens.has_motion_blur() {
+        let time = if self.lens.has_motion_blur() {
             open + (close - open) * stream.next_1d()
         } else {
             open
         };
+        match &self.rig {
+            // A moving camera: the frame at the ray's time makes the ray.
+            Some(rig) => CameraModel::new(&rig.at(time))
+                .with_lens(self.lens)
+                .lens_ray(s, time, stream),
+            None => self.lens_ray(s, time, stream),
+        }
+    }
+
+    /// The ray through `s` at `time`, through the lens point the stream's
+    /// next 2-D value picks (with an aperture).
+    fn lens_ray(&self, s: Vec2, time: f32, stream: &mut SampleStream) -> Ray {
+        let mut ray = self.ray(s);
+        ray.time = time;
         if self.lens.has_depth_of_field() {
             let l = concentric_disk(stream.next_2d()) * self.lens.aperture;
             let offset = l.x * self.horizontal + l.y * self.up;

@@ -1,5 +1,9 @@
 //! What distribution ray tracing adds to a 6.837 scene: a thin lens and a
-//! shutter on the camera, per-effect ray counts, ambient occlusion.
+//! shutter on the camera, per-effect ray counts, ambient occlusion, a
+//! moving camera.
+
+use crate::math::Motion;
+use std::sync::Arc;
 
 /// Thin lens and shutter of the camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,7 +79,7 @@ pub struct AmbientOcclusion {
 }
 
 /// Everything distribution ray tracing adds to a scene.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Effects {
     /// Thin lens and shutter.
     pub lens: Lens,
@@ -83,4 +87,8 @@ pub struct Effects {
     pub samples: EffectSamples,
     /// Ambient occlusion on the ambient term, if wanted.
     pub ambient_occlusion: Option<AmbientOcclusion>,
+    /// The camera rig's keyframed motion (world space, applied to the
+    /// camera's centre, direction and up), for a moving camera in an
+    /// animation or in motion blur; `None`: the camera stands still.
+    pub camera_motion: Option<Arc<Motion>>,
 }

@@ -210,6 +210,15 @@ struct RenderArgs {
     /// Render only the pixels X0..X1 x Y0..Y1 (half-open; x right, y down from the top) as an EXR piece.
     #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"])]
     crop: Option<Vec<u32>>,
+    /// Render frame K of the scene's animation (moving objects and camera): time K/FPS, the shutter moved there; '#'s in output names become the frame number (shot_####.png).
+    #[arg(long, value_name = "K", conflicts_with = "frame_from_env")]
+    frame: Option<u32>,
+    /// Like --frame, with K read from an environment variable (SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, ...).
+    #[arg(long, value_name = "VAR")]
+    frame_from_env: Option<String>,
+    /// Frames per second of --frame (frame K starts at K/FPS in the scene's time unit).
+    #[arg(long, default_value_t = glint::animation::DEFAULT_FPS)]
+    fps: f64,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_samples: Option<Vec<String>>,
@@ -431,6 +440,22 @@ fn render(a: RenderArgs) -> ExitCode {
                     eprintln!("glint: {what} expects a file and a zoom from 1 to 1000, got {v:?}");
                     return ExitCode::from(2);
                 }
+            }
+        }
+    }
+    let frame = match (a.frame, &a.frame_from_env) {
+        (Some(k), _) => Some(Ok(k)),
+        (_, Some(var)) => Some(glint::animation::frame_from_env(var, |v| {
+            std::env::var(v).ok()
+        })),
+        _ => None,
+    };
+    if let Some(k) = frame {
+        match k.and_then(|k| glint::animation::FrameTime::new(k, a.fps)) {
+            Ok(f) => job = job.at_frame(f),
+            Err(e) => {
+                eprintln!("glint: {e}");
+                return ExitCode::from(2);
             }
         }
     }

@@ -202,7 +202,7 @@ impl<'a> Parser<'a> {
 
     /// `Keyframe { time t [translate V] [rotate axis degrees] [scale V] }`;
     /// returns the keyframe and its time token (for ordering errors).
-    fn keyframe(&mut self, kw: Token<'a>) -> Result<(Keyframe, Token<'a>)> {
+    pub(super) fn keyframe(&mut self, kw: Token<'a>) -> Result<(Keyframe, Token<'a>)> {
         let mut time = None;
         let mut key = Keyframe::identity(0.0);
         let close = self.fields(kw, &["time", "translate", "rotate", "scale"], |p, f| {

@@ -4,11 +4,12 @@ use super::cursor::{closing, ordinal, plural, vec_text, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
 use crate::format::diagnostic::quote;
-use crate::math::Vec3;
+use crate::math::{Keyframe, Motion, Vec3};
 use crate::scene::{
     AmbientOcclusion, AreaShape, Background, Camera, EffectSamples, Effects, Lens, Light, Scene,
 };
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Parses a whole scene; `file` is used in messages and to resolve meshes.
 pub(crate) fn parse(src: &str, file: &Path) -> Result<Scene> {
@@ -32,9 +33,10 @@ pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<Pa
                     let found = format!("a second camera {}", quote(t.text));
                     return Err(p.error_found(Some(t), "one camera", found));
                 }
-                let (cam, lens) = p.camera(t)?;
+                let (cam, lens, motion) = p.camera(t)?;
                 camera = Some(cam);
                 effects.lens = lens;
+                effects.camera_motion = motion.map(Arc::new);
             }
             (Kind::Word, "Samples") => {
                 p.once(samples_seen, t)?;
@@ -111,16 +113,25 @@ impl<'a> Parser<'a> {
         Err(self.error_found(Some(t), expected, format!("a second {}", quote(t.text))))
     }
 
-    /// `OrthographicCamera {center direction up size [shutter]}` or
-    /// `PerspectiveCamera {center direction up angle [aperture focusDistance]
-    /// [shutter]}`, fields in any order. Returns the camera and its lens.
-    fn camera(&mut self, kw: Token<'a>) -> Result<(Camera, Lens)> {
+    /// `OrthographicCamera {center direction up size [shutter] [keyframes]}`
+    /// or `PerspectiveCamera {center direction up angle [aperture
+    /// focusDistance] [shutter] [keyframes]}`, fields in any order, where
+    /// keyframes are `numKeyframes n Keyframe{..}*` (the camera rig's motion).
+    /// Returns the camera, its lens and its motion.
+    fn camera(&mut self, kw: Token<'a>) -> Result<(Camera, Lens, Option<Motion>)> {
         let ortho = kw.text == "OrthographicCamera";
         let last = if ortho { "size" } else { "angle" };
         let (mut center, mut direction, mut up, mut extent) = (None, None, None, None);
-        let (mut aperture, mut focus, mut shutter) = (None, None, None);
+        let (mut aperture, mut focus, mut shutter, mut motion) = (None, None, None, None);
         let names: &[&str] = if ortho {
-            &["center", "direction", "up", "size", "shutter"]
+            &[
+                "center",
+                "direction",
+                "up",
+                "size",
+                "shutter",
+                "numKeyframes",
+            ]
         } else {
             &[
                 "center",
@@ -130,6 +141,7 @@ impl<'a> Parser<'a> {
                 "aperture",
                 "focusDistance",
                 "shutter",
+                "numKeyframes",
             ]
         };
         let close = self.fields(kw, names, |p, f| {
@@ -151,6 +163,7 @@ impl<'a> Parser<'a> {
                     )?;
                     shutter = Some([open, close]);
                 }
+                "numKeyframes" => motion = Some(p.keyframe_list()?),
                 _ => extent = Some(p.number()?),
             }
             Ok(())
@@ -200,7 +213,7 @@ impl<'a> Parser<'a> {
                 up,
                 size: extent,
             };
-            return Ok((cam, lens));
+            return Ok((cam, lens, motion));
         }
         if !(extent > 0.0 && extent < 180.0) {
             return Err(self.error(
@@ -214,7 +227,39 @@ impl<'a> Parser<'a> {
             up,
             angle_deg: extent,
         };
-        Ok((cam, lens))
+        Ok((cam, lens, motion))
+    }
+
+    /// After `numKeyframes`: the count and that many `Keyframe` blocks, times
+    /// strictly increasing.
+    fn keyframe_list(&mut self) -> Result<Motion> {
+        let (n, n_tok) = self.non_negative("a count after 'numKeyframes'")?;
+        if n == 0 {
+            return Err(self.error(Some(n_tok), "at least 1 keyframe"));
+        }
+        let mut keys: Vec<Keyframe> = Vec::new();
+        while keys.len() < n {
+            match self.next() {
+                Some(t) if t.is("Keyframe") => {
+                    let (key, time_tok) = self.keyframe(t)?;
+                    if let Some(prev) = keys.last() {
+                        if key.time <= prev.time {
+                            let expected =
+                                format!("a keyframe time after the previous one ({})", prev.time);
+                            return Err(self.error(Some(time_tok), expected));
+                        }
+                    }
+                    keys.push(key);
+                }
+                other => {
+                    let expected = format!("{} (numKeyframes {n})", plural(n, "keyframe"));
+                    let what = other.map_or("the end of the file".to_string(), |t| quote(t.text));
+                    let found = format!("{what} after {}", plural(keys.len(), "keyframe"));
+                    return Err(self.error_found(other, expected, found));
+                }
+            }
+        }
+        Ok(Motion::new(keys).expect("checked: at least one key, increasing times"))
     }
 
     /// `Lights { numLights n (DirectionalLight{..} | PointLight{..})* }`.
