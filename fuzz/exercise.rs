@@ -163,7 +163,7 @@ fn trace_a_few(scene: &Scene) {
                 ..BuildOptions::default()
             },
         );
-        let camera = CameraModel::new(&world.camera).with_lens(scene.effects.lens);
+        let camera = CameraModel::of_world(&world, &scene.effects);
         let _ = world.bounds();
         for transparent_shadows in [false, true] {
             let integrator = Whitted {
