@@ -107,12 +107,14 @@ fn a_frame_sees_objects_where_their_keyframes_put_them() {
     // Measured: identical (the moving sphere's inverse pose at t = 0.5 is an
     // exact translation by 1); bounds allow for rounding in the pose.
     let (mean, off) = compare(&f12, &still);
+    println!("frame 12 vs still: mean {mean}, {off} of the pixels off");
     assert!(
         mean < 1e-4 && off < 0.002,
         "frame 12 vs still: {mean} {off}"
     );
     // The frame number matters: frame 0 has the ball elsewhere.
     let (mean0, off0) = compare(&f0, &still);
+    println!("frame 0 vs still: mean {mean0}, {off0} of the pixels off");
     assert!(off0 > 0.03, "frame 0 looks like frame 12: {mean0} {off0}");
 }
 
@@ -154,6 +156,7 @@ fn a_moving_camera_is_where_its_keyframes_put_it() {
         &[],
     ));
     let (mean, off) = compare(&pixels(&d.join("f6.exr")), &pixels(&d.join("still.exr")));
+    println!("frame 6 vs still camera: mean {mean}, {off} of the pixels off");
     // The still camera's numbers are decimal roundings of the rig's pose
     // (about 1e-7 relative), so edge pixels may flip; measured: mean
     // 0.0, 0 pixels off.
