@@ -320,8 +320,7 @@ fn render_bands<I: Integrator>(
                             samples[p] = 1;
                             if settings.pixel_cost {
                                 cost[p] = PixelCost {
-                                    tests: counters.intersection_tests
-                                        - before.intersection_tests,
+                                    tests: counters.intersection_tests - before.intersection_tests,
                                     nodes: counters.nodes_visited - before.nodes_visited,
                                 };
                             }

@@ -3,7 +3,7 @@
 
 use super::node::{is_leaf, leaf_range, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
 use crate::math::{Ray, Vec3};
-use crate::shape::{intersect_triangle, WatertightRay};
+use crate::shape::{intersect_triangle, may_hit4, WatertightRay};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
@@ -83,17 +83,18 @@ impl RayData {
 
     /// The watertight test (`shape::triangle::intersect_triangle`) on the
     /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)` and
-    /// their parameters. Each lane calls the very function brute force calls,
-    /// so results are bit-identical; unused and non-triangle lanes (NaN
-    /// vertices) are skipped by their ids.
+    /// their parameters. A 4-lane f32 pre-test (`shape::may_hit4`) drops the
+    /// lanes it proves missed; each remaining lane calls the very function
+    /// brute force calls, so results are bit-identical. Unused and
+    /// non-triangle lanes (NaN vertices) are skipped by their ids.
     #[inline(always)]
     fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, Vec4) {
         let mut mask = 0;
         let mut t = Vec4::ZERO;
-        for lane in 0..4 {
-            if b.ids[lane] & OTHER != 0 {
-                continue; // NO_ITEM has the flag too
-            }
+        let mut todo = may_hit4(&self.wt, &b.v) & triangle_lanes(b);
+        while todo != 0 {
+            let lane = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
             let p = |k: usize| Vec3::new(b.v[k][0][lane], b.v[k][1][lane], b.v[k][2][lane]);
             if let Some(h) = intersect_triangle(&self.wt, p(0), p(1), p(2), tmin, tmax) {
                 mask |= 1 << lane;
@@ -102,6 +103,17 @@ impl RayData {
         }
         (mask, t)
     }
+}
+
+/// The lanes of a block that hold triangles (not [`OTHER`] items, not unused:
+/// [`NO_ITEM`] has the flag too).
+#[inline(always)]
+fn triangle_lanes(b: &Tri4) -> u32 {
+    let mut m = 0;
+    for (lane, &id) in b.ids.iter().enumerate() {
+        m |= u32::from(id & OTHER == 0) << lane;
+    }
+    m
 }
 
 /// Pushes the children in `mask` (at least two) far to near and returns the
