@@ -20,6 +20,7 @@
 
 mod build;
 mod node;
+mod pages;
 mod traverse;
 
 pub use traverse::{Fallback, TrianglesOnly};

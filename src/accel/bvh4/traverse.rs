@@ -1,7 +1,7 @@
 //! Closest-hit and any-hit traversal: per-ray constants computed once, four
 //! boxes per node step, nearest child first, blocks of four triangles per leaf.
 
-use super::node::{is_leaf, leaf_range, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
+use super::node::{is_leaf, leaf_range, prefetch, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
 use crate::math::{Ray, Vec3};
 use crate::shape::{intersect_triangle, may_hit4, WatertightRay};
 use crate::stats::TraversalStats;
@@ -116,6 +116,23 @@ fn triangle_lanes(b: &Tri4) -> u32 {
     m
 }
 
+/// Starts loading the children in `mask` (nodes or first blocks), so that
+/// the nearest one's load and the others' overlap.
+#[inline(always)]
+fn prefetch_children(nodes: &[Node4], tris: &[Tri4], node: &Node4, mut mask: u32) {
+    while mask != 0 {
+        let c = node.child[mask.trailing_zeros() as usize];
+        mask &= mask - 1;
+        if !is_leaf(c) {
+            if let Some(n) = nodes.get(c as usize) {
+                prefetch(n);
+            }
+        } else if let Some(b) = tris.get(leaf_range(c).0) {
+            prefetch(b);
+        }
+    }
+}
+
 /// Pushes the children in `mask` (at least two) far to near and returns the
 /// nearest, so that the nearest is visited first and the others are popped
 /// in order of distance.
@@ -181,6 +198,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
                 } else {
+                    prefetch_children(nodes, tris, node, mask);
                     order(node, mask, dist, &mut stack, &mut sp)
                 };
                 continue;
@@ -258,6 +276,9 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
             // more than it saves for shadow rays.
             let (mut mask, _) = rd.boxes(node, tmin4, tmax4);
             if mask != 0 {
+                if mask & (mask - 1) != 0 {
+                    prefetch_children(nodes, tris, node, mask);
+                }
                 let first = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 while mask != 0 {
