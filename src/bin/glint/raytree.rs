@@ -91,7 +91,8 @@ fn run_inner(a: RaytreeArgs) -> Result<(), (u8, String)> {
             flatten: true,
         },
     );
-    let camera = CameraModel::new(&world.camera);
+    let camera =
+        CameraModel::of_world(&world, &scene.effects).at_time(scene.effects.lens.shutter[0]);
     let integrator = Whitted {
         bounces: a.bounces,
         weight_cutoff: a.weight,

@@ -75,7 +75,8 @@ pub fn run(a: StructureArgs) -> ExitCode {
         glint::output::write_file(&a.output, traversal::to_obj(&segments).as_bytes())
             .map_err(|e| e.to_string())
     } else {
-        let camera = CameraModel::new(&world.camera);
+        let camera =
+            CameraModel::of_world(&world, &scene.effects).at_time(scene.effects.lens.shutter[0]);
         let shading = Whitted {
             shadows: true,
             ..Whitted::default()

@@ -75,7 +75,8 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
         .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
     // World space: the exported cells and boxes are in the scene's coordinates.
     let world = World::build_world_space(&scene, BuildOptions::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera =
+        CameraModel::of_world(&world, &scene.effects).at_time(scene.effects.lens.shutter[0]);
     let structure = Structure::build(&world, a.accel).ok_or((
         2,
         format!(
