@@ -28,6 +28,9 @@ pub(crate) trait Source: Sync {
     fn id(&self, k: usize) -> u32;
     /// The item with id `id`.
     fn item(&self, id: u32) -> Item;
+    /// The vertices of item `id`, which [`Source::item`] called a triangle
+    /// (filling the leaves: without `item`'s degeneracy check again).
+    fn vertices(&self, id: u32) -> [Vec3; 3];
 }
 
 /// Bins per axis of the SAH sweep.
@@ -639,11 +642,9 @@ fn block<S: Source>(items: &[PrimRef], src: &S) -> Tri4 {
             continue;
         }
         b.ids[lane] = r.id;
-        if let Item::Triangle(v) = src.item(r.id) {
-            for (k, p) in v.iter().enumerate() {
-                for a in 0..3 {
-                    b.v[k][a][lane] = p[a];
-                }
+        for (k, p) in src.vertices(r.id).iter().enumerate() {
+            for a in 0..3 {
+                b.v[k][a][lane] = p[a];
             }
         }
     }

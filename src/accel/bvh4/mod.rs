@@ -19,6 +19,7 @@
 //! no `std::arch`, stable Rust.
 
 mod build;
+mod dispatch;
 mod node;
 mod pages;
 mod traverse;
@@ -33,7 +34,6 @@ use crate::stats::{Counters, TraversalStats};
 use build::{Item, Source};
 pub(crate) use node::Node4;
 use node::Tri4;
-use traverse::RayData;
 
 /// A 4-wide BVH over triangles (and, through a [`Fallback`], other shapes).
 pub struct Bvh4 {
@@ -62,6 +62,12 @@ impl Source for Prims<'_> {
             other => Item::Other(other.bounds()),
         }
     }
+    fn vertices(&self, id: u32) -> [Vec3; 3] {
+        match &self.prims[id as usize].shape {
+            Shape::Triangle(t) => t.v,
+            _ => unreachable!("only triangles are asked for their vertices"),
+        }
+    }
 }
 
 /// An indexed triangle mesh as a build source (ids are triangle indices).
@@ -85,6 +91,9 @@ impl<V: Copy + Into<Vec3> + Sync> Source for IndexedMesh<'_, V> {
         } else {
             Item::Triangle([a, b, c])
         }
+    }
+    fn vertices(&self, id: u32) -> [Vec3; 3] {
+        self.indices[id as usize].map(|i| self.vertices[i as usize].into())
     }
 }
 
@@ -139,8 +148,7 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> Option<(f32, u32)> {
-        let rd = RayData::new(ray);
-        traverse::closest(&self.nodes, &self.tris, fallback, &rd, tmin, tmax, stats)
+        dispatch::closest(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
@@ -153,8 +161,7 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> bool {
-        let rd = RayData::new(ray);
-        traverse::any(&self.nodes, &self.tris, fallback, &rd, tmin, tmax, stats)
+        dispatch::any(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
     }
 }
 

@@ -44,7 +44,7 @@ pub(crate) struct RayData {
 }
 
 impl RayData {
-    #[inline]
+    #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         let o = ray.origin;
         let inv = Vec3::ONE / ray.dir;
@@ -166,8 +166,9 @@ fn order(
     kids[k - 1].0
 }
 
-/// The closest hit: `(t, item id)`.
-#[inline]
+/// The closest hit: `(t, item id)`. Always inlined, so that `dispatch`'s
+/// AVX2 copy compiles it with AVX2.
+#[inline(always)]
 pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     nodes: &[Node4],
     tris: &[Tri4],
@@ -247,8 +248,9 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     }
 }
 
-/// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first hit.
-#[inline]
+/// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first
+/// hit. Always inlined (see [`closest`]).
+#[inline(always)]
 pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     nodes: &[Node4],
     tris: &[Tri4],
