@@ -23,17 +23,17 @@ pub struct FrameTime {
 }
 
 impl FrameTime {
-    /// Frame `index` at `fps`, checked: `index <= MAX_FRAME`, `fps` finite
-    /// and in `(0, 1e6]`.
+    /// Frame `index` at `fps`, checked: `index <= MAX_FRAME` and `fps` in
+    /// `[0.001, 1e6]`, so every frame's time is finite in `f32`.
     pub fn new(index: u32, fps: f64) -> Result<Self, String> {
         if index > MAX_FRAME {
             return Err(format!(
                 "frame {index}: expected a frame number from 0 to {MAX_FRAME}"
             ));
         }
-        if !(fps.is_finite() && fps > 0.0 && fps <= 1e6) {
+        if !(0.001..=1e6).contains(&fps) {
             return Err(format!(
-                "--fps {fps}: expected frames per second above 0 and at most 1000000"
+                "--fps {fps}: expected frames per second from 0.001 to 1000000"
             ));
         }
         Ok(Self { index, fps })
@@ -106,11 +106,13 @@ mod tests {
     #[test]
     fn bad_frames_and_rates_are_refused() {
         assert!(FrameTime::new(MAX_FRAME + 1, 24.0).is_err());
-        for fps in [0.0, -1.0, f64::NAN, f64::INFINITY, 2e6] {
+        for fps in [0.0, -1.0, 1e-300, f64::NAN, f64::INFINITY, 2e6] {
             let e = FrameTime::new(0, fps).unwrap_err();
             assert!(e.contains("--fps"), "{e}");
         }
         assert!(FrameTime::new(MAX_FRAME, 1e6).is_ok());
+        let slowest = FrameTime::new(MAX_FRAME, 0.001).unwrap();
+        assert!(slowest.shutter([0.0, 1.0]).iter().all(|t| t.is_finite()));
     }
 
     #[test]

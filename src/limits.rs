@@ -171,13 +171,16 @@ pub fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
-/// A user-given text for a message: at most 60 characters, control and
-/// invisible characters escaped, single-quoted.
+/// A user-given text for a message: at most 60 characters and 160 bytes
+/// once control and invisible characters are escaped (an escape such as
+/// `\u{feff}` is 8 bytes, so 60 of them made a 500-byte message: found by
+/// the `job_args` fuzzer), single-quoted.
 pub fn shorten(s: &str) -> String {
-    const MAX: usize = 60;
+    const MAX_CHARS: usize = 60;
+    const MAX_BYTES: usize = 160;
     let mut out = String::from("'");
     for (i, c) in s.chars().enumerate() {
-        if i == MAX {
+        if i == MAX_CHARS || out.len() >= MAX_BYTES {
             out.push('…');
             break;
         }
@@ -282,6 +285,10 @@ mod tests {
         let s = shorten(&"9".repeat(10_000));
         assert!(s.chars().count() < 70, "{s}");
         assert_eq!(shorten("a\u{feff}b\n"), "'a\\u{feff}b\\u{a}'");
+        // Sixty invisible characters: bounded in bytes too.
+        let s = shorten(&"\u{feff}\u{17}".repeat(30));
+        assert!(s.len() <= 160 + 16, "{} bytes: {s}", s.len());
+        assert!(s.ends_with("…'"), "{s}");
     }
 
     #[test]

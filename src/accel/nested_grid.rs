@@ -28,7 +28,7 @@
 //! its level. A finer cell's exit is never after its coarse cell's, so
 //! stopping inside a finer grid is as safe as stopping in the coarse one.
 
-use super::grid::build::{fill, resolution_with};
+use super::grid::build::{box_entries, fill, fit_entries, resolution_with};
 use super::grid::{CellWalk, Face, Lattice};
 use super::mailbox::Mailbox;
 use super::overlap::{margin, padded};
@@ -227,21 +227,25 @@ impl Builder<'_> {
         let res = if region.is_empty() {
             [1, 1, 1]
         } else {
-            resolution_with(&region, ids.len(), None, density)
+            let res = resolution_with(&region, ids.len(), None, density);
+            fit_entries(self.prims, ids, &region, res, self.margin)
         };
         let lattice = Lattice::new(region, res);
-        let (offsets, items) = fill(self.prims, ids, &lattice, self.margin);
         let cells = lattice.cells();
         if must_pay {
-            // Every cell has the same area: Σ area(c)/area · (1 + n_c).
+            // Every cell has the same area: Σ area(c)/area · (1 + n_c), with
+            // the boxes' cell counts for Σ n_c (an upper bound, known before
+            // filling: a crowded cell that does not pay costs O(n), not a fill).
+            let entries = box_entries(self.prims, ids, &lattice, self.margin);
             let share = lattice.cell_bounds([0, 0, 0]).surface_area() / region.surface_area();
-            let cost = share * (CELL_COST * cells as f32 + items.len() as f32);
+            let cost = share * (CELL_COST * cells as f32 + entries as f32);
             // A NaN cost (a region without area) does not pay either.
             let pays = cost < ids.len() as f32;
             if !pays {
                 return None;
             }
         }
+        let (offsets, items) = fill(self.prims, ids, &lattice, self.margin);
         let mut child = vec![0u32; cells];
         let mut children = Vec::new();
         // Compacted lists: a crowded cell's primitives move to its finer grid.

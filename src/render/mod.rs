@@ -313,15 +313,14 @@ fn render_bands<I: Integrator>(
                                 let before = counters;
                                 let mut stream = sampler.stream((i, j), 0);
                                 stream.skip();
-                                let ray =
-                                    camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
-                                let (c, hit) = integrator.li(
+                                let (c, hit) = camera_sample(
                                     world,
-                                    &ray,
-                                    camera.tmin(),
+                                    camera,
+                                    integrator,
+                                    (i, j, o),
+                                    (w, h),
                                     &mut stream,
                                     &mut counters,
-                                    &mut NoObserver,
                                 );
                                 color[p] = Vec3::ZERO + c;
                                 depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
@@ -351,15 +350,14 @@ fn render_bands<I: Integrator>(
                                         (o, filter.weight(o.x - 0.5, o.y - 0.5))
                                     }
                                 };
-                                let ray =
-                                    camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
-                                let (c, hit) = integrator.li(
+                                let (c, hit) = camera_sample(
                                     world,
-                                    &ray,
-                                    camera.tmin(),
+                                    camera,
+                                    integrator,
+                                    (i, j, o),
+                                    (w, h),
                                     &mut stream,
                                     &mut counters,
-                                    &mut NoObserver,
                                 );
                                 if wt == 1.0 {
                                     // `c · 1` is `c`: the box filters' case.
@@ -449,14 +447,14 @@ fn render_tile<I: Integrator>(
             for k in 0..sampler.spp() {
                 let mut stream = sampler.stream((i, j), k);
                 let o = stream.next_2d();
-                let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
-                let (c, hit) = integrator.li(
+                let (c, hit) = camera_sample(
                     world,
-                    &ray,
-                    camera.tmin(),
+                    camera,
+                    integrator,
+                    (i, j, o),
+                    (w, h),
                     &mut stream,
                     &mut counters,
-                    &mut NoObserver,
                 );
                 film.splat(i, row, o, c);
                 let d2 = (o - settings.reference).length_squared();
@@ -479,6 +477,30 @@ fn render_tile<I: Integrator>(
         }
     }
     (film, counters, kept)
+}
+
+/// One camera sample: the ray through offset `o` of pixel `(i, j)` of a
+/// `w`×`h` image, at the stream's time and lens point, traced by the
+/// integrator (every loop's inner step).
+#[inline]
+fn camera_sample<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    (i, j, o): (u32, u32, Vec2),
+    (w, h): (u32, u32),
+    stream: &mut SampleStream,
+    counters: &mut Counters,
+) -> (Vec3, Option<crate::world::Hit>) {
+    let ray = camera.sample_ray(screen_point(i, j, o, w, h), stream);
+    integrator.li(
+        world,
+        &ray,
+        camera.tmin(),
+        stream,
+        counters,
+        &mut NoObserver,
+    )
 }
 
 /// Grey level of the depth image: `t0` (near) is white, `t1` is black,

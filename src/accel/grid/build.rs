@@ -14,6 +14,13 @@ const MAX_AUTO_RES: u32 = 128;
 /// scaled down uniformly so a typo on the command line cannot exhaust memory.
 const MAX_CELLS: f64 = (1u64 << 24) as f64;
 
+/// Most (cell, primitive) entries a grid may hold: 2^26, about 270 MB of
+/// lists (and twice that while filling). Primitives whose boxes overlap
+/// (thousands of big spheres around one point) would otherwise put every
+/// primitive in every cell, `cells × n` entries; the resolution is lowered
+/// until the boxes' cell counts fit (see [`fit_entries`]).
+const MAX_ENTRIES: u64 = 1 << 26;
+
 /// Cells along the longest axis per `∛n` that the uniform grid picks.
 pub(crate) const DENSITY: f32 = 3.0;
 
@@ -50,6 +57,57 @@ pub(crate) fn resolution_with(
     res.map(|r| ((r as f64 * shrink) as u32).max(1))
 }
 
+/// `res`, lowered until the padded boxes of `ids` cover at most
+/// [`MAX_ENTRIES`] cells in all (an upper bound of the entries `fill`
+/// makes: its exact tests only remove cells); each pass scales every axis
+/// by the cube root of the excess, down to one cell.
+pub(crate) fn fit_entries(
+    prims: &[Primitive],
+    ids: &[u32],
+    region: &Aabb,
+    res: [u32; 3],
+    m: f32,
+) -> [u32; 3] {
+    fit_within(prims, ids, region, res, m, MAX_ENTRIES)
+}
+
+/// [`fit_entries`] with the budget `max` (tests use small ones).
+fn fit_within(
+    prims: &[Primitive],
+    ids: &[u32],
+    region: &Aabb,
+    mut res: [u32; 3],
+    m: f32,
+    max: u64,
+) -> [u32; 3] {
+    loop {
+        let entries = box_entries(prims, ids, &Lattice::new(*region, res), m);
+        if entries <= max || res == [1, 1, 1] {
+            return res;
+        }
+        let shrink = (max as f64 / entries as f64).cbrt();
+        res = res.map(|r| ((r as f64 * shrink) as u32).clamp(1, r.saturating_sub(1).max(1)));
+    }
+}
+
+/// How many cells of `lattice` the padded boxes of `ids` cover, in all: an
+/// upper bound of the entries [`fill`] makes (its exact tests only remove
+/// cells), in O(n).
+pub(crate) fn box_entries(prims: &[Primitive], ids: &[u32], lattice: &Lattice, m: f32) -> u64 {
+    ids.iter()
+        .map(|&id| {
+            let b = padded(&prims[id as usize].shape.bounds(), m);
+            (0..3)
+                .map(|a| {
+                    let lo = lattice.coord(a, b.min[a]) as u64;
+                    let hi = lattice.coord(a, b.max[a]) as u64;
+                    hi.saturating_sub(lo) + 1
+                })
+                .product::<u64>()
+        })
+        .sum()
+}
+
 /// Builds the grid over `ids`.
 ///
 /// Each primitive goes into every cell its (padded) box overlaps; when that
@@ -70,7 +128,8 @@ pub(super) fn build(prims: &[Primitive], ids: &[u32], fixed: Option<[u32; 3]>) -
     let res = if bounds.is_empty() {
         [1, 1, 1]
     } else {
-        resolution(&padded_bounds, ids.len(), fixed)
+        let res = resolution(&padded_bounds, ids.len(), fixed);
+        fit_entries(prims, ids, &padded_bounds, res, m)
     };
     let lattice = Lattice::new(padded_bounds, res);
     let (offsets, items) = fill(prims, ids, &lattice, m);
@@ -138,7 +197,33 @@ pub(crate) fn fill(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::testutil::{sphere, Rng};
     use crate::math::Vec3;
+
+    #[test]
+    fn overlapping_boxes_lower_the_resolution_to_the_entry_budget() {
+        // 400 spheres of radius 10 around one point: every box covers the
+        // whole region, so the automatic 22³ grid would list each of them
+        // in all 10,648 cells (4.3M entries).
+        let mut r = Rng::new(3);
+        let prims: Vec<Primitive> = (0..400).map(|_| sphere(r.v(-1.0, 1.0), 10.0)).collect();
+        let ids: Vec<u32> = (0..400).collect();
+        let region = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
+        let m = margin(&region);
+        let region = padded(&region, m);
+        let auto = resolution(&region, ids.len(), None);
+        let budget = 100_000;
+        let res = fit_within(&prims, &ids, &region, auto, m, budget);
+        let cells = |r: [u32; 3]| r.iter().map(|&v| v as u64).product::<u64>();
+        assert!(cells(res) < cells(auto), "{auto:?} -> {res:?}");
+        let (_, items) = fill(&prims, &ids, &Lattice::new(region, res), m);
+        assert!(items.len() as u64 <= budget, "{} entries", items.len());
+        // Small primitives keep the automatic resolution.
+        let small: Vec<Primitive> = (0..400).map(|_| sphere(r.v(-5.0, 5.0), 0.01)).collect();
+        let b = small.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
+        let want = resolution(&b, 400, None);
+        assert_eq!(fit_within(&small, &ids, &b, want, margin(&b), budget), want);
+    }
 
     #[test]
     fn automatic_resolution_follows_aspect() {

@@ -148,18 +148,44 @@ impl<'a> Parser<'a> {
             Some(t) if t.is("numKeyframes") => {}
             other => return Err(self.error(other, "'numKeyframes'")),
         }
+        let (motion, n) = self.keyframe_list()?;
+        let child = match self.next() {
+            Some(t) if is_object(t) => self.object(t, material)?,
+            Some(t) if t.is("Keyframe") => {
+                return Err(self.too_many(t, n, "keyframe", "numKeyframes"))
+            }
+            other => {
+                return Err(self.error(
+                    other,
+                    "the object to move (a KeyframedTransform holds one object)",
+                ))
+            }
+        };
+        match self.next() {
+            Some(t) if t.kind == Kind::Close => {}
+            other => {
+                let expected = format!("{} (a KeyframedTransform holds one object)", closing(kw));
+                return Err(self.error(other, expected));
+            }
+        }
+        Ok(Node::Moving {
+            motion: Arc::new(motion),
+            child: Box::new(child),
+        })
+    }
+
+    /// After `numKeyframes`: the count and that many `Keyframe` blocks, times
+    /// strictly increasing (a `KeyframedTransform`'s and a camera's). Returns
+    /// the motion and the count.
+    pub(super) fn keyframe_list(&mut self) -> Result<(Motion, usize)> {
         let (n, n_tok) = self.non_negative("a count after 'numKeyframes'")?;
         if n == 0 {
             return Err(self.error(Some(n_tok), "at least 1 keyframe"));
         }
         let mut keys: Vec<Keyframe> = Vec::new();
-        let child = loop {
-            let t = self.next();
-            match t {
+        while keys.len() < n {
+            match self.next() {
                 Some(t) if t.is("Keyframe") => {
-                    if keys.len() == n {
-                        return Err(self.too_many(t, n, "keyframe", "numKeyframes"));
-                    }
                     let (key, time_tok) = self.keyframe(t)?;
                     if let Some(prev) = keys.last() {
                         if key.time <= prev.time {
@@ -170,39 +196,21 @@ impl<'a> Parser<'a> {
                     }
                     keys.push(key);
                 }
-                Some(t) if is_object(t) && keys.len() == n => break self.object(t, material)?,
-                Some(t) if is_object(t) || t.kind == Kind::Close => {
-                    let found =
-                        format!("{} after {}", quote(t.text), plural(keys.len(), "keyframe"));
+                other => {
                     let expected = format!("{} (numKeyframes {n})", plural(n, "keyframe"));
-                    return Err(self.error_found(Some(t), expected, found));
+                    let what = other.map_or("the end of the file".to_string(), |t| quote(t.text));
+                    let found = format!("{what} after {}", plural(keys.len(), "keyframe"));
+                    return Err(self.error_found(other, expected, found));
                 }
-                _ if keys.len() == n => {
-                    return Err(self.error(
-                        t,
-                        "the object to move (a KeyframedTransform holds one object)",
-                    ))
-                }
-                _ => return Err(self.error(t, "'Keyframe'")),
-            }
-        };
-        match self.next() {
-            Some(t) if t.kind == Kind::Close => {}
-            other => {
-                let expected = format!("{} (a KeyframedTransform holds one object)", closing(kw));
-                return Err(self.error(other, expected));
             }
         }
         let motion = Motion::new(keys).expect("checked: at least one key, increasing times");
-        Ok(Node::Moving {
-            motion: Arc::new(motion),
-            child: Box::new(child),
-        })
+        Ok((motion, n))
     }
 
     /// `Keyframe { time t [translate V] [rotate axis degrees] [scale V] }`;
     /// returns the keyframe and its time token (for ordering errors).
-    pub(super) fn keyframe(&mut self, kw: Token<'a>) -> Result<(Keyframe, Token<'a>)> {
+    fn keyframe(&mut self, kw: Token<'a>) -> Result<(Keyframe, Token<'a>)> {
         let mut time = None;
         let mut key = Keyframe::identity(0.0);
         let close = self.fields(kw, &["time", "translate", "rotate", "scale"], |p, f| {

@@ -4,7 +4,7 @@ use super::cursor::{closing, ordinal, plural, vec_text, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
 use crate::format::diagnostic::quote;
-use crate::math::{Keyframe, Motion, Vec3};
+use crate::math::{Motion, Vec3};
 use crate::scene::{
     AmbientOcclusion, AreaShape, Background, Camera, EffectSamples, Effects, Lens, Light, Scene,
 };
@@ -163,7 +163,7 @@ impl<'a> Parser<'a> {
                     )?;
                     shutter = Some([open, close]);
                 }
-                "numKeyframes" => motion = Some(p.keyframe_list()?),
+                "numKeyframes" => motion = Some(p.keyframe_list()?.0),
                 _ => extent = Some(p.number()?),
             }
             Ok(())
@@ -228,38 +228,6 @@ impl<'a> Parser<'a> {
             angle_deg: extent,
         };
         Ok((cam, lens, motion))
-    }
-
-    /// After `numKeyframes`: the count and that many `Keyframe` blocks, times
-    /// strictly increasing.
-    fn keyframe_list(&mut self) -> Result<Motion> {
-        let (n, n_tok) = self.non_negative("a count after 'numKeyframes'")?;
-        if n == 0 {
-            return Err(self.error(Some(n_tok), "at least 1 keyframe"));
-        }
-        let mut keys: Vec<Keyframe> = Vec::new();
-        while keys.len() < n {
-            match self.next() {
-                Some(t) if t.is("Keyframe") => {
-                    let (key, time_tok) = self.keyframe(t)?;
-                    if let Some(prev) = keys.last() {
-                        if key.time <= prev.time {
-                            let expected =
-                                format!("a keyframe time after the previous one ({})", prev.time);
-                            return Err(self.error(Some(time_tok), expected));
-                        }
-                    }
-                    keys.push(key);
-                }
-                other => {
-                    let expected = format!("{} (numKeyframes {n})", plural(n, "keyframe"));
-                    let what = other.map_or("the end of the file".to_string(), |t| quote(t.text));
-                    let found = format!("{what} after {}", plural(keys.len(), "keyframe"));
-                    return Err(self.error_found(other, expected, found));
-                }
-            }
-        }
-        Ok(Motion::new(keys).expect("checked: at least one key, increasing times"))
     }
 
     /// `Lights { numLights n (DirectionalLight{..} | PointLight{..})* }`.
