@@ -10,6 +10,9 @@
 # warm-up. Ratios: throughput glint/Embree (>1: glint faster), build time glint/Embree MEDIUM (<1:
 # glint faster), both against Embree's default MEDIUM build and single-ray queries (rtcIntersect1 /
 # rtcOccluded1). Raw outputs are kept in WORKDIR/compare/.
+# THREADS="1 2" (default) picks the thread counts. BASELINE=path/to/an/older/glint also runs that
+# binary in each repetition, right after the current one, and prints a second table for it: a
+# before/after comparison against the same Embree runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-${TMPDIR:-/tmp}/glint-anchors}
@@ -30,17 +33,24 @@ mkdir -p "$out"
 for rep in $(seq 1 "$reps"); do
   [ "${SUMMARY_ONLY:-0}" = 1 ] && break
   for m in $meshes; do
-    for t in 1 2; do
+    for t in ${THREADS:-1 2}; do
       echo "rep $rep: $m, $t thread(s)" >&2
       "$work/embree_bench" "$work/$m.obj" "$work/rays/$m" "$t" > "$out/embree.$m.$t.$rep.txt"
       ./target/release/glint bench rays "$work/$m.obj" "$work/rays/$m" --threads "$t" --json \
         > "$out/glint.$m.$t.$rep.json"
+      if [ -n "${BASELINE:-}" ]; then
+        "$BASELINE" bench rays "$work/$m.obj" "$work/rays/$m" --threads "$t" --json \
+          > "$out/baseline.$m.$t.$rep.json"
+      fi
     done
   done
 done
-python3 - "$out" "$reps" $meshes <<'PY'
-import json, re, statistics, sys
+for who in glint ${BASELINE:+baseline}; do
+[ "$who" = glint ] || echo -e "\nBASELINE ($BASELINE), same Embree runs:"
+WHO=$who THREADS="${THREADS:-1 2}" python3 - "$out" "$reps" $meshes <<'PY'
+import json, os, re, statistics, sys
 out, reps, meshes = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+who, threads = os.environ["WHO"], [int(t) for t in os.environ["THREADS"].split()]
 def embree(path):
     e = {}
     for line in open(path):
@@ -56,13 +66,13 @@ def close(a, b):  # the issue's criterion: within 0.1%
 print("| mesh | threads | primary | incoherent | shadow | build (glint/Embree MEDIUM) | glint build ms | Embree build ms | bytes/triangle | checksums |")
 print("|---|---|---|---|---|---|---|---|---|---|")
 for m in meshes:
-    for t in (1, 2):
+    for t in threads:
         rows = []
         ok = True
         for rep in range(1, reps + 1):
             try:  # a repetition cut short (see SUMMARY_ONLY) is left out
                 e = embree(f"{out}/embree.{m}.{t}.{rep}.txt")
-                g = json.load(open(f"{out}/glint.{m}.{t}.{rep}.json"))
+                g = json.load(open(f"{out}/{who}.{m}.{t}.{rep}.json"))
                 e["shadow"]
             except (OSError, ValueError, KeyError):
                 continue
@@ -85,3 +95,4 @@ for m in meshes:
               f"{'within 0.1%' if ok else 'DIFFER'} |")
 print(f"\nratios: medians over the repetitions shown (of {reps} planned); throughput ratios > 1 and build ratios < 1 favour glint")
 PY
+done

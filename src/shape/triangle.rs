@@ -25,11 +25,11 @@ use crate::math::{gamma, Aabb, Ray, SurfacePoint, Vec3};
 /// shear that maps the direction onto `+z`. Compute it once per ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WatertightRay {
-    origin: Vec3,
+    pub(super) origin: Vec3,
     /// Permuted axes: `kz` is the direction's dominant axis.
-    k: [usize; 3],
+    pub(super) k: [usize; 3],
     /// Shear `(−d_x/d_z, −d_y/d_z, 1/d_z)` in permuted axes.
-    shear: Vec3,
+    pub(super) shear: Vec3,
 }
 
 impl WatertightRay {

@@ -1,25 +1,33 @@
 //! The fast BVH, glint's default accelerator: 4-wide nodes tested with
-//! 4-lane box tests, leaves of four-triangle blocks (each lane tested with
-//! the shared watertight test), binned SAH built in parallel.
+//! 4-lane box tests, leaves of four-triangle blocks (a 4-lane pre-test, then
+//! the shared watertight test on the lanes it could not rule out), binned
+//! SAH built in parallel.
 //!
 //! - `node.rs`: the layout (`Node4`: four boxes in structure-of-arrays form,
-//!   128 bytes; `Tri4`: four triangles' vertices, 160 bytes).
+//!   128 bytes; `Tri4`: four triangles' vertices, 160 bytes) and prefetch.
 //! - `build.rs`: binned SAH (32 bins, costs counted in blocks of four),
 //!   children built in parallel above 16k items, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
 //!   nearest-child-first closest hit, unordered any hit with early exit.
+//! - `dispatch.rs`: the traversal compiled for SSE2 and for AVX2, picked at
+//!   run time; `pages.rs`: the large arrays on transparent huge pages.
 //!
 //! What it shares with the textbook [`Bvh`](super::Bvh): the padding rule
 //! (boxes grown by `overlap::margin`) and the triangle arithmetic
-//! (`shape::intersect_triangle`, the watertight test, called per lane),
-//! which is why it returns exactly brute force's hits. Non-triangle primitives (spheres,
-//! transformed shapes) sit in the same leaves and are tested one at a time.
+//! (`shape::intersect_triangle`, the watertight test; `shape::may_hit4` only
+//! drops lanes that test provably rejects), which is why it returns exactly
+//! brute force's hits. Non-triangle primitives (spheres, transformed shapes)
+//! sit in the same leaves and are tested one at a time.
 //!
-//! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere): no `unsafe`,
-//! no `std::arch`, stable Rust.
+//! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere), stable
+//! Rust. `unsafe` appears in three places, each with its soundness argument:
+//! the prefetch hint (`node.rs`), `madvise` (`pages.rs`) and the call of the
+//! AVX2 copy after the CPU check (`dispatch.rs`); each has a portable path.
 
 mod build;
+mod dispatch;
 mod node;
+mod pages;
 mod traverse;
 
 pub use traverse::{Fallback, TrianglesOnly};
@@ -32,7 +40,6 @@ use crate::stats::{Counters, TraversalStats};
 use build::{Item, Source};
 pub(crate) use node::Node4;
 use node::Tri4;
-use traverse::RayData;
 
 /// A 4-wide BVH over triangles (and, through a [`Fallback`], other shapes).
 pub struct Bvh4 {
@@ -61,6 +68,12 @@ impl Source for Prims<'_> {
             other => Item::Other(other.bounds()),
         }
     }
+    fn vertices(&self, id: u32) -> [Vec3; 3] {
+        match &self.prims[id as usize].shape {
+            Shape::Triangle(t) => t.v,
+            _ => unreachable!("only triangles are asked for their vertices"),
+        }
+    }
 }
 
 /// An indexed triangle mesh as a build source (ids are triangle indices).
@@ -84,6 +97,9 @@ impl<V: Copy + Into<Vec3> + Sync> Source for IndexedMesh<'_, V> {
         } else {
             Item::Triangle([a, b, c])
         }
+    }
+    fn vertices(&self, id: u32) -> [Vec3; 3] {
+        self.indices[id as usize].map(|i| self.vertices[i as usize].into())
     }
 }
 
@@ -138,8 +154,7 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> Option<(f32, u32)> {
-        let rd = RayData::new(ray);
-        traverse::closest(&self.nodes, &self.tris, fallback, &rd, tmin, tmax, stats)
+        dispatch::closest(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
@@ -152,8 +167,7 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> bool {
-        let rd = RayData::new(ray);
-        traverse::any(&self.nodes, &self.tris, fallback, &rd, tmin, tmax, stats)
+        dispatch::any(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
     }
 }
 

@@ -1,9 +1,9 @@
 //! Closest-hit and any-hit traversal: per-ray constants computed once, four
 //! boxes per node step, nearest child first, blocks of four triangles per leaf.
 
-use super::node::{is_leaf, leaf_range, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
+use super::node::{is_leaf, leaf_range, prefetch, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
 use crate::math::{Ray, Vec3};
-use crate::shape::{intersect_triangle, WatertightRay};
+use crate::shape::{intersect_triangle, may_hit4, WatertightRay};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
@@ -44,7 +44,7 @@ pub(crate) struct RayData {
 }
 
 impl RayData {
-    #[inline]
+    #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         let o = ray.origin;
         let inv = Vec3::ONE / ray.dir;
@@ -83,17 +83,18 @@ impl RayData {
 
     /// The watertight test (`shape::triangle::intersect_triangle`) on the
     /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)` and
-    /// their parameters. Each lane calls the very function brute force calls,
-    /// so results are bit-identical; unused and non-triangle lanes (NaN
-    /// vertices) are skipped by their ids.
+    /// their parameters. A 4-lane f32 pre-test (`shape::may_hit4`) drops the
+    /// lanes it proves missed; each remaining lane calls the very function
+    /// brute force calls, so results are bit-identical. Unused and
+    /// non-triangle lanes (NaN vertices) are skipped by their ids.
     #[inline(always)]
     fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, Vec4) {
         let mut mask = 0;
         let mut t = Vec4::ZERO;
-        for lane in 0..4 {
-            if b.ids[lane] & OTHER != 0 {
-                continue; // NO_ITEM has the flag too
-            }
+        let mut todo = may_hit4(&self.wt, &b.v) & triangle_lanes(b);
+        while todo != 0 {
+            let lane = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
             let p = |k: usize| Vec3::new(b.v[k][0][lane], b.v[k][1][lane], b.v[k][2][lane]);
             if let Some(h) = intersect_triangle(&self.wt, p(0), p(1), p(2), tmin, tmax) {
                 mask |= 1 << lane;
@@ -101,6 +102,34 @@ impl RayData {
             }
         }
         (mask, t)
+    }
+}
+
+/// The lanes of a block that hold triangles (not [`OTHER`] items, not unused:
+/// [`NO_ITEM`] has the flag too).
+#[inline(always)]
+fn triangle_lanes(b: &Tri4) -> u32 {
+    let mut m = 0;
+    for (lane, &id) in b.ids.iter().enumerate() {
+        m |= u32::from(id & OTHER == 0) << lane;
+    }
+    m
+}
+
+/// Starts loading the children in `mask` (nodes or first blocks), so that
+/// the nearest one's load and the others' overlap.
+#[inline(always)]
+fn prefetch_children(nodes: &[Node4], tris: &[Tri4], node: &Node4, mut mask: u32) {
+    while mask != 0 {
+        let c = node.child[mask.trailing_zeros() as usize];
+        mask &= mask - 1;
+        if !is_leaf(c) {
+            if let Some(n) = nodes.get(c as usize) {
+                prefetch(n);
+            }
+        } else if let Some(b) = tris.get(leaf_range(c).0) {
+            prefetch(b);
+        }
     }
 }
 
@@ -137,8 +166,9 @@ fn order(
     kids[k - 1].0
 }
 
-/// The closest hit: `(t, item id)`.
-#[inline]
+/// The closest hit: `(t, item id)`. Always inlined, so that `dispatch`'s
+/// AVX2 copy compiles it with AVX2.
+#[inline(always)]
 pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     nodes: &[Node4],
     tris: &[Tri4],
@@ -169,6 +199,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
                 } else {
+                    prefetch_children(nodes, tris, node, mask);
                     order(node, mask, dist, &mut stack, &mut sp)
                 };
                 continue;
@@ -217,8 +248,9 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     }
 }
 
-/// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first hit.
-#[inline]
+/// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first
+/// hit. Always inlined (see [`closest`]).
+#[inline(always)]
 pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     nodes: &[Node4],
     tris: &[Tri4],
@@ -246,6 +278,9 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
             // more than it saves for shadow rays.
             let (mut mask, _) = rd.boxes(node, tmin4, tmax4);
             if mask != 0 {
+                if mask & (mask - 1) != 0 {
+                    prefetch_children(nodes, tris, node, mask);
+                }
                 let first = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 while mask != 0 {

@@ -1,0 +1,86 @@
+//! The traversal compiled twice: for the x86-64 baseline (SSE2) and for
+//! AVX2, picked per query by a run-time check of the CPU (a cached flag).
+//!
+//! Why: release binaries must run on any x86-64, so glam's `Vec4` compiles
+//! to SSE2; the AVX2 copy of the same source gets three-operand (VEX)
+//! instructions and more freedom in scheduling. The arithmetic is the same
+//! IEEE operations in the same order (Rust never fuses a multiply and an
+//! add, and the min/max intrinsics keep their SSE semantics), so both copies
+//! return bit-identical results. Elsewhere only the portable copy exists.
+
+use super::node::{Node4, Tri4};
+use super::traverse::{self, Fallback, RayData};
+use crate::math::Ray;
+use crate::stats::TraversalStats;
+
+/// Closest hit (see `traverse::closest`), on the best copy for this CPU.
+#[inline]
+pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
+    nodes: &[Node4],
+    tris: &[Tri4],
+    fallback: &F,
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+    stats: &mut S,
+) -> Option<(f32, u32)> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: calling a `#[target_feature(enable = "avx2")]` function is
+        // sound exactly when the CPU supports AVX2, checked just above.
+        return unsafe { avx2::closest(nodes, tris, fallback, ray, tmin, tmax, stats) };
+    }
+    traverse::closest(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+}
+
+/// Any hit (see `traverse::any`), on the best copy for this CPU.
+#[inline]
+pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
+    nodes: &[Node4],
+    tris: &[Tri4],
+    fallback: &F,
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+    stats: &mut S,
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: as in `closest`: AVX2 is present, checked just above.
+        return unsafe { avx2::any(nodes, tris, fallback, ray, tmin, tmax, stats) };
+    }
+    traverse::any(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+}
+
+/// The AVX2 copies: the portable traversal inlined into functions compiled
+/// with AVX2 enabled.
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::*;
+
+    #[target_feature(enable = "avx2")]
+    pub(super) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
+        nodes: &[Node4],
+        tris: &[Tri4],
+        fallback: &F,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        stats: &mut S,
+    ) -> Option<(f32, u32)> {
+        traverse::closest(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) fn any<S: TraversalStats, F: Fallback + ?Sized>(
+        nodes: &[Node4],
+        tris: &[Tri4],
+        fallback: &F,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        stats: &mut S,
+    ) -> bool {
+        traverse::any(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+    }
+}
