@@ -113,7 +113,16 @@ fn check_lines(data: &CourseData, tag: &str, lines: Vec<CmdLine>) -> usize {
                 .iter()
                 .find(|e| e.0 == name)
                 .map_or((MAX_MEAN_ABS, MAX_FRAC_OFF), |e| (e.1, e.2));
-            match diff(&dir.join(name), &reference_for(&data.refs, name)) {
+            let measured = diff(&dir.join(name), &reference_for(&data.refs, name));
+            if let Ok(d) = &measured {
+                // Shown with `--nocapture`: the numbers the tolerances come from.
+                eprintln!(
+                    "measured {tag} {name}: mean abs {:.3}, {:.3}% off",
+                    d.mean_abs,
+                    100.0 * d.frac_off
+                );
+            }
+            match measured {
                 Ok(d) if d.mean_abs <= max_mean && d.frac_off <= max_off => checked += 1,
                 Ok(d) => failures.push(format!(
                     "{name}: mean abs {:.2} (max {max_mean}), {:.2}% pixels off (max {:.1}%)",
