@@ -82,7 +82,7 @@ fn reference_ambient(materials: &[Material], i: usize) -> Vec3 {
 /// (the ray tree is linear in the ambient light, so local lighting and
 /// ambient can be rendered apart and summed):
 /// - `lit`: no ambient light, checker cells scaled to π/3, woods not
-///   reflective;
+///   reflective and drawn with the marble formula;
 /// - `ambient`: no lights, a black background, and each texture replaced by
 ///   a plain material with the reference's ambient reflectance.
 fn reference_quirks(scene: &Scene) -> (Scene, Scene) {
@@ -102,7 +102,19 @@ fn reference_quirks(scene: &Scene) -> (Scene, Scene) {
                 // sin(3x) > 0 ⇔ ⌊3x/π⌋ even, so the reference's checker is
                 // ours after a scale by 3/π in texture space.
                 TextureKind::Checkerboard => *transform = sin_cells * *transform,
-                TextureKind::Wood { .. } => not_reflective.extend([*a, *b]),
+                TextureKind::Wood {
+                    octaves,
+                    frequency,
+                    amplitude,
+                } => {
+                    not_reflective.extend([*a, *b]);
+                    // The reference's Wood is its Marble formula: stripes.
+                    *kind = TextureKind::Marble {
+                        octaves: *octaves,
+                        frequency: *frequency,
+                        amplitude: *amplitude,
+                    };
+                }
                 _ => {}
             }
         }
