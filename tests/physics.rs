@@ -202,7 +202,7 @@ fn ray_tree_weights_and_colour_are_products_of_coefficients() {
     let d = Vec3::new(1.0, -1.0, 0.0).normalize();
 
     // One sheet: colour = ambient·kd + r·sky + t·sky.
-    let one = scene(plane(Vec3::Y, 0.0, 0), vec![m], vec![], bg);
+    let one = scene(plane(Vec3::Y, 0.0, 0), vec![m], vec![], bg.clone());
     let world = World::build_world_space(&one, BuildOptions::default());
     let (c, rays) = trace(&world, &glass_tracer(), Ray::new(-d, d));
     let expected = ambient * kd + r * sky + t * sky;
