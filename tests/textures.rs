@@ -218,9 +218,17 @@ fn fmt3(v: [f64; 3]) -> String {
     )
 }
 
-/// Per-pixel tolerance of the quirk-reproduced renders: (output, largest
-/// mean abs difference, largest fraction of pixels off by more than 24).
-/// Measured 2026-11-30 (see docs/testing.md); the margin is stated there.
+/// Per-pixel tolerance of the quirk-reproduced renders: (command file,
+/// output, pixel step, largest mean abs difference, largest fraction of
+/// pixels off by more than 24), from the differences measured 2026-11-30
+/// plus a margin, the core images' tolerance where that covers them:
+/// - checkerboards: mean 0.10-0.39, 0.06-0.42% off (6_13 the most);
+/// - 6_15, 6_16, 6_17a: identical but for 6_17a's mean of 0.004;
+/// - 6_18a (every 4th pixel of every 4th row, 5000 pixels): mean 0.70, 0.94%
+///   off (47 pixels), on a logo seen through 5 bounces of reflection.
+///
+/// Moved by one pixel, the one-ray renders measure a mean of 2.0 to 44 and
+/// 1.9% to 29% off: every one fails.
 const PIXEL_CASES: &[(&str, &str, u32, f64, f64)] = &[
     ("A6_cmd.txt", "output6_13.tga", 1, 1.0, 0.005),
     ("A6_cmd.txt", "output6_14.tga", 1, 1.0, 0.005),
@@ -229,7 +237,7 @@ const PIXEL_CASES: &[(&str, &str, u32, f64, f64)] = &[
     ("A6_cmd.txt", "output6_15.tga", 1, 1.0, 0.005),
     ("A6_cmd.txt", "output6_17a.tga", 1, 1.0, 0.005),
     ("A6_cmd.txt", "output6_16.tga", 1, 1.0, 0.005),
-    ("A6_cmd.txt", "output6_18a.tga", 4, 1.0, 0.005),
+    ("A6_cmd.txt", "output6_18a.tga", 4, 1.0, 0.015),
 ];
 
 /// Every textured render with the reference's quirks reproduced, pixel by
