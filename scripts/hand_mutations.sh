@@ -28,7 +28,7 @@ for name in "$@"; do
   elif grep -q 'could not compile' "$log"; then
     echo "$name: DOES NOT BUILD (see $log)"
   else
-    failed=$(grep -E '^test .* FAILED$|^    [a-z_:]+$' "$log" | grep -v '^test result' | sed 's/^test //; s/ \.\.\. FAILED$//; s/^ *//' | sort -u | tr '\n' ' ')
+    failed=$(grep -E '^test .* FAILED$' "$log" | sed 's/^test //; s/ \.\.\. FAILED$//' | sort -u | tr '\n' ' ')
     echo "$name: caught by $failed"
   fi
   git apply -R "$patch"

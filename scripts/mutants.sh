@@ -12,7 +12,6 @@
 # `mutants/<module>/mutants.out/` (caught.txt, missed.txt, timeout.txt,
 # unviable.txt); docs/testing.md records the counts and each missed mutant.
 #
-# One job at a time (`-j 1`): the machine this was written on has two cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,9 +19,24 @@ if [ $# -eq 0 ]; then
   set -- integrator shape accel light material render
 fi
 
-# The fast test selection: unit tests plus the integration tests that check
-# closed forms and brute-force agreement without course data.
-FAST_TESTS=(--lib --test physics --test accel_edges --test ray_tree --test accel_agree --test watertight)
+# The fast test selection per module: the unit tests plus the integration
+# tests that check closed forms or brute-force agreement without course data
+# (every extra test binary is linked again for every mutant).
+tests_for() {
+  case "$1" in
+    accel*|*/accel/*) echo --lib --test accel_edges --test accel_agree ;;
+    shape*|*/shape/*) echo --lib --test accel_edges --test watertight --test physics ;;
+    *) echo --lib --test physics --test ray_tree ;;
+  esac
+}
+
+# Mutants are built in this tree's own target/ (--in-place): a copy would
+# build every dependency again. cargo-mutants edits the sources while it
+# runs and restores them; start from a tree with nothing uncommitted in src/.
+if ! git diff --quiet -- src; then
+  echo "src/ has uncommitted changes: commit or stash them first" >&2
+  exit 1
+fi
 
 for target in "$@"; do
   if [ -f "$target" ]; then
@@ -35,8 +49,9 @@ for target in "$@"; do
   mkdir -p "mutants/$name"
   echo "== $target"
   # cargo-mutants exits non-zero when a mutant is missed: keep going.
-  cargo mutants --profile mutants -j 1 --timeout "${MUTANTS_TIMEOUT:-240}" \
-    "${files[@]}" --output "mutants/$name" -- "${FAST_TESTS[@]}" || true
+  # shellcheck disable=SC2046
+  cargo mutants --in-place --profile mutants --timeout "${MUTANTS_TIMEOUT:-300}" \
+    "${files[@]}" --output "mutants/$name" -- $(tests_for "$target") || true
   for kind in caught missed timeout unviable; do
     f="mutants/$name/mutants.out/$kind.txt"
     printf '%-9s %s\n' "$kind" "$( [ -f "$f" ] && wc -l < "$f" || echo 0)"
