@@ -4,11 +4,11 @@
 //! panic is a crash.
 
 use glint::format::{obj::load_obj_from_bytes, parse_scene};
-use glint::integrator::{NoObserver, RayKind, Whitted};
+use glint::integrator::{AoSettings, NoObserver, RayKind, Whitted};
 use glint::job::Job;
 use glint::limits;
 use glint::math::{Vec2, Vec3};
-use glint::render::{screen_point, CameraModel};
+use glint::render::{screen_point, CameraModel, Sampler, SamplerKind};
 use glint::scene::{Background, Camera, Node, Scene, Shape};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -59,6 +59,7 @@ pub fn obj(data: &[u8]) {
             shape: Shape::Mesh(Arc::new(mesh)),
             material: None,
         }]),
+        effects: Default::default(),
     };
     trace_a_few(&scene);
 }
@@ -153,6 +154,7 @@ pub fn job_args(data: &[u8]) {
 /// integrator feature on. A hit reached by a finite ray must have a `t` and a
 /// normal that are not NaN.
 fn trace_a_few(scene: &Scene) {
+    let sampler = Sampler::new(SamplerKind::Sobol, 1, 0);
     for flatten in [true, false] {
         let world = World::build(
             scene,
@@ -161,7 +163,7 @@ fn trace_a_few(scene: &Scene) {
                 ..BuildOptions::default()
             },
         );
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::of_world(&world, &scene.effects);
         let _ = world.bounds();
         for transparent_shadows in [false, true] {
             let integrator = Whitted {
@@ -176,18 +178,30 @@ fn trace_a_few(scene: &Scene) {
                 } else {
                     glint::material::TextureSpace::World
                 },
+                // Every sampled effect too (area lights and glossy lobes
+                // come from the scene).
+                shadow_samples: 2,
+                glossy_samples: 2,
+                ambient_occlusion: Some(AoSettings {
+                    samples: 2,
+                    distance: 1.0,
+                }),
             };
             let mut c = Counters::default();
             for j in 0..3 {
                 for i in 0..3 {
-                    let ray = camera.ray(screen_point(i, j, Vec2::splat(0.5), 3, 3));
-                    let (_color, hit) = integrator.trace(
+                    let mut stream = sampler.stream((i, j), 0);
+                    stream.next_2d();
+                    let ray =
+                        camera.sample_ray(screen_point(i, j, Vec2::splat(0.5), 3, 3), &mut stream);
+                    let (_color, hit) = integrator.trace_sampled(
                         &world,
                         &ray,
                         camera.tmin(),
                         RayKind::Primary,
                         0,
                         1.0,
+                        &mut stream,
                         &mut c,
                         &mut NoObserver,
                     );

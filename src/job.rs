@@ -2,8 +2,9 @@
 //! The binaries only translate their flags into a [`Job`].
 
 use crate::accel::AccelKind;
+use crate::animation::FrameTime;
 use crate::format::{load_scene_files, ParseError};
-use crate::integrator::Whitted;
+use crate::integrator::{AmbientOcclusion, AoSettings, Whitted};
 use crate::limits;
 use crate::output::{
     check_image, check_not_input, check_path, check_writable, write_file, write_rgb, FileIdentity,
@@ -13,9 +14,9 @@ use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
     render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
-    Sampler, Settings, TILE_SIZE,
+    Sampler, SamplerKind, Settings, TILE_SIZE,
 };
-use crate::scene::Scene;
+use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
 use crate::viz::draw::Canvas;
 use crate::viz::grid::{legend, voxelize, GridView};
@@ -68,6 +69,10 @@ pub struct Job {
     /// Render only this piece of the frame and write it as an EXR with a
     /// data window (`--tile I/N`, `--crop`); see [`crate::piece`].
     pub piece: Option<PieceSpec>,
+    /// Render this frame of the scene's animation (`--frame K --fps F`):
+    /// the shutter interval moves to start at `K / F`; see
+    /// [`crate::animation`].
+    pub frame: Option<FrameTime>,
     /// Set by a Ctrl-C handler: stop, and save what was rendered as
     /// `NAME.partial.EXT`.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -75,6 +80,11 @@ pub struct Job {
     pub progress: bool,
     /// Write the statistics as JSON here.
     pub stats_json: Option<PathBuf>,
+    /// Rays per effect given on the command line; each one set overrides
+    /// the scene's `Samples`/`AmbientOcclusion` count.
+    pub effect_samples: SampleOverrides,
+    /// Render the grey ambient-occlusion image instead of the shaded one.
+    pub ao_image: bool,
     /// Render the uniform grid's occupied cells instead of the scene
     /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
     /// the one `build.accel` asks for, if it is a grid.
@@ -251,6 +261,25 @@ impl Job {
             )));
         }
         Ok(())
+    }
+
+    /// This job for frame `f` of the scene's animation: [`Job::frame`] set,
+    /// and the last run of `#` in every output file name replaced by the
+    /// frame number ([`crate::animation::frame_path`]), so one command line
+    /// serves every frame of a job array.
+    pub fn at_frame(mut self, f: FrameTime) -> Self {
+        let k = f.index;
+        let name = |p: &mut PathBuf| *p = crate::animation::frame_path(p, k);
+        self.output.iter_mut().for_each(name);
+        self.normals.iter_mut().for_each(name);
+        self.samples_image.iter_mut().for_each(name);
+        self.cost_image.iter_mut().for_each(name);
+        self.stats_json.iter_mut().for_each(name);
+        self.depth.iter_mut().for_each(|d| name(&mut d.2));
+        self.samples_view.iter_mut().for_each(|v| name(&mut v.0));
+        self.filter_view.iter_mut().for_each(|v| name(&mut v.0));
+        self.frame = Some(f);
+        self
     }
 
     /// The hash of everything that decides the image (not the accelerator,
@@ -450,9 +479,12 @@ impl Job {
             samples_image: None,
             cost_image: None,
             piece: None,
+            frame: None,
             cancel: None,
             progress: false,
             stats_json: None,
+            effect_samples: SampleOverrides::default(),
+            ao_image: false,
             visualize_grid: None,
         }
     }
@@ -468,6 +500,37 @@ impl Job {
         s.keep_samples = self.samples_view.is_some();
         s.pixel_cost = self.cost_image.is_some();
         s.tile_size = TILE_SIZE;
+        s
+    }
+
+    /// [`Job::settings`] for `scene`: time and lens samples multiply the
+    /// camera samples per pixel (when the scene has motion blur or depth of
+    /// field). When no sampler was asked for and the scene samples anything
+    /// (area lights, glossy materials, shutter, lens, ambient occlusion),
+    /// Owen-scrambled Sobol replaces the fixed one-ray sampler, whose regular
+    /// grid would band soft shadows and strobe motion.
+    pub fn effect_settings(&self, scene: &Scene, samples: EffectSamples) -> Settings {
+        let mut s = self.settings();
+        let lens = &scene.effects.lens;
+        let mut camera_rays = 1u32;
+        if lens.has_motion_blur() {
+            camera_rays = camera_rays.saturating_mul(samples.time);
+        }
+        if lens.has_depth_of_field() {
+            camera_rays = camera_rays.saturating_mul(samples.lens);
+        }
+        let kind = match self.sampler {
+            Some(sm) => sm.kind,
+            None if camera_rays > 1 || self.ao_image || uses_sampling(scene) => SamplerKind::Sobol,
+            None => s.sampler.kind,
+        };
+        if kind != s.sampler.kind || camera_rays > 1 {
+            s.sampler = Sampler::new(
+                kind,
+                s.sampler.spp().saturating_mul(camera_rays),
+                s.sampler.seed,
+            );
+        }
         s
     }
 
@@ -503,10 +566,30 @@ impl Job {
             }
             None => scene,
         };
+        let mut scene = scene;
+        if let Some(f) = self.frame {
+            // Before the piece hash: pieces of different frames never merge.
+            scene.effects.lens.shutter = f.shutter(scene.effects.lens.shutter);
+        }
         let t_world = Instant::now();
         let world = World::build(&scene, self.build);
         let world_ms = t_world.elapsed().as_secs_f64() * 1e3;
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::of_world(&world, &scene.effects);
+        let samples = self.effect_samples.apply(scene.effects.samples);
+        let mut integrator = self.integrator;
+        integrator.shadow_samples = samples.shadow;
+        integrator.glossy_samples = samples.glossy;
+        let ao = |distance| AoSettings {
+            samples: samples.ao,
+            distance,
+        };
+        integrator.ambient_occlusion = scene.effects.ambient_occlusion.map(|a| ao(a.distance));
+        let ao_integrator = AmbientOcclusion {
+            settings: ao(scene
+                .effects
+                .ambient_occlusion
+                .map_or(f32::INFINITY, |a| a.distance)),
+        };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.threads.unwrap_or(0))
             .build()
@@ -530,18 +613,17 @@ impl Job {
             cancel: self.cancel.as_deref(),
             on_progress: Some(&tick),
         };
-        let settings = self.settings();
+        let settings = self.effect_settings(&scene, samples);
         let start = Instant::now();
-        let rendered = pool.install(|| match &self.piece {
-            Some(p) => render_region(
-                &world,
-                &camera,
-                &self.integrator,
-                &settings,
-                control,
-                p.rect,
-            ),
-            None => render_image(&world, &camera, &self.integrator, &settings, control),
+        let rendered = pool.install(|| match (&self.piece, self.ao_image) {
+            (Some(p), false) => {
+                render_region(&world, &camera, &integrator, &settings, control, p.rect)
+            }
+            (Some(p), true) => {
+                render_region(&world, &camera, &ao_integrator, &settings, control, p.rect)
+            }
+            (None, false) => render_image(&world, &camera, &integrator, &settings, control),
+            (None, true) => render_image(&world, &camera, &ao_integrator, &settings, control),
         });
         let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();
@@ -646,6 +728,48 @@ impl Job {
     }
 }
 
+/// Effect ray counts from the command line; `None` keeps the scene's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SampleOverrides {
+    /// `--shadow-samples`.
+    pub shadow: Option<u32>,
+    /// `--glossy-samples`.
+    pub glossy: Option<u32>,
+    /// `--time-samples`.
+    pub time: Option<u32>,
+    /// `--lens-samples`.
+    pub lens: Option<u32>,
+    /// `--ao-samples`.
+    pub ao: Option<u32>,
+}
+
+impl SampleOverrides {
+    /// The scene's counts with these overrides applied.
+    pub fn apply(&self, scene: EffectSamples) -> EffectSamples {
+        EffectSamples {
+            shadow: self.shadow.unwrap_or(scene.shadow),
+            glossy: self.glossy.unwrap_or(scene.glossy),
+            time: self.time.unwrap_or(scene.time),
+            lens: self.lens.unwrap_or(scene.lens),
+            ao: self.ao.unwrap_or(scene.ao),
+        }
+    }
+}
+
+/// Whether anything in `scene` takes random decisions: an area light, a
+/// glossy material, a shutter interval, a lens, ambient occlusion.
+pub fn uses_sampling(scene: &Scene) -> bool {
+    let e = &scene.effects;
+    scene.lights.iter().any(|l| matches!(l, Light::Area { .. }))
+        || scene
+            .materials
+            .iter()
+            .any(|m| matches!(m, Material::Phong(p) if p.glossiness > 0.0))
+        || e.lens.has_motion_blur()
+        || e.lens.has_depth_of_field()
+        || e.ambient_occlusion.is_some()
+}
+
 fn progress_bar(pixels: u64) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(pixels);
     if let Ok(style) = indicatif::ProgressStyle::with_template(
@@ -686,6 +810,10 @@ pub struct Stats {
     pub rays_reflected: u64,
     /// Refracted rays.
     pub rays_refracted: u64,
+    /// Of the reflected and refracted rays, those over a glossy lobe.
+    pub rays_glossy: u64,
+    /// Ambient-occlusion rays.
+    pub rays_occlusion: u64,
     /// All rays.
     pub rays_total: u64,
     /// Ray–primitive intersection tests.
@@ -762,6 +890,8 @@ impl Report {
             rays_shadow: c.shadow,
             rays_reflected: c.reflected,
             rays_refracted: c.refracted,
+            rays_glossy: c.glossy,
+            rays_occlusion: c.occlusion,
             rays_total: c.rays_total(),
             intersection_tests: c.intersection_tests,
             nodes_visited: c.nodes_visited,
@@ -799,6 +929,8 @@ impl Report {
         line("shadow rays", st.rays_shadow.to_string());
         line("reflected rays", st.rays_reflected.to_string());
         line("refracted rays", st.rays_refracted.to_string());
+        line("  of which glossy", st.rays_glossy.to_string());
+        line("occlusion rays", st.rays_occlusion.to_string());
         line("rays total", st.rays_total.to_string());
         line("intersection tests", st.intersection_tests.to_string());
         line("nodes visited", st.nodes_visited.to_string());

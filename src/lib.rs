@@ -1,5 +1,6 @@
 //! glint: a teaching-grade, production-fast CPU ray tracer.
 pub mod accel;
+pub mod animation;
 pub mod format;
 pub mod integrator;
 pub mod job;
@@ -12,6 +13,7 @@ pub mod piece;
 pub mod primitive;
 pub mod query;
 pub mod render;
+pub mod sampler;
 pub mod scene;
 pub mod shape;
 pub mod stats;

@@ -14,6 +14,10 @@ pub struct Counters {
     pub reflected: u64,
     /// Refracted (transmitted) rays.
     pub refracted: u64,
+    /// Of the reflected and refracted rays, those spread over a glossy lobe.
+    pub glossy: u64,
+    /// Ambient-occlusion hemisphere rays.
+    pub occlusion: u64,
     /// Ray–primitive intersection tests.
     pub intersection_tests: u64,
     /// Accelerator nodes or grid cells visited.
@@ -23,7 +27,7 @@ pub struct Counters {
 impl Counters {
     /// All rays of every kind.
     pub fn rays_total(&self) -> u64 {
-        self.primary + self.shadow + self.reflected + self.refracted
+        self.primary + self.shadow + self.reflected + self.refracted + self.occlusion
     }
 }
 
@@ -33,6 +37,8 @@ impl AddAssign for Counters {
         self.shadow += o.shadow;
         self.reflected += o.reflected;
         self.refracted += o.refracted;
+        self.glossy += o.glossy;
+        self.occlusion += o.occlusion;
         self.intersection_tests += o.intersection_tests;
         self.nodes_visited += o.nodes_visited;
     }

@@ -22,7 +22,7 @@
 //! `SCENES × RAYS_PER_SCENE` = 120,000 rays.
 
 use glint::accel::{AccelKind, Aggregate, Grid, Split};
-use glint::math::{Mat4, Ray, Vec3};
+use glint::math::{Keyframe, Mat4, Motion, Quat, Ray, Vec3};
 use glint::scene::{Background, Camera, Mesh, Node, Scene, Shape};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -330,6 +330,7 @@ fn scene(seed: u64) -> (Scene, bool) {
         background: Background::default(),
         materials: vec![],
         root,
+        effects: Default::default(),
     };
     (scene, lattice_rays && seed % 4 != 3)
 }
@@ -748,4 +749,157 @@ fn cost_report() {
             }
         }
     }
+}
+
+// ---------------------------------------------------------------------------
+// Motion blur: moving objects and timed rays
+
+/// A random keyframed motion over [0, 1]: two to four poses with
+/// translation, rotation and (sometimes non-uniform) scale.
+fn random_motion(r: &mut Rng) -> Arc<Motion> {
+    let n = 2 + r.below(3);
+    let keys = (0..n)
+        .map(|i| Keyframe {
+            time: i as f32 / (n - 1) as f32,
+            translation: r.v(-3.0, 3.0),
+            rotation: Quat::from_axis_angle(r.unit(), r.range(0.0, 3.0)),
+            scale: if r.chance(0.5) {
+                Vec3::splat(r.range(0.5, 1.5))
+            } else {
+                Vec3::new(r.range(0.5, 1.5), r.range(0.5, 1.5), r.range(0.5, 1.5))
+            },
+        })
+        .collect();
+    Arc::new(Motion::new(keys).expect("increasing times"))
+}
+
+/// Static objects beside moving ones (some nested in a static transform,
+/// some moving inside a moving parent).
+fn moving_scene(seed: u64) -> Scene {
+    let mut r = Rng::new(seed ^ 0x6d6f7665);
+    let mut budget = 20 + r.below(120);
+    let mut kids = Vec::new();
+    while budget > 0 {
+        let node = random_node(&mut r, 1, &mut budget);
+        kids.push(match r.below(4) {
+            0 => node,
+            1 => xf(
+                random_matrix(&mut r),
+                Node::Moving {
+                    motion: random_motion(&mut r),
+                    child: Box::new(node),
+                },
+            ),
+            2 => Node::Moving {
+                motion: random_motion(&mut r),
+                child: Box::new(Node::Moving {
+                    motion: random_motion(&mut r),
+                    child: Box::new(node),
+                }),
+            },
+            _ => Node::Moving {
+                motion: random_motion(&mut r),
+                child: Box::new(node),
+            },
+        });
+    }
+    let (base, _) = scene(1);
+    Scene {
+        root: Node::Group(kids),
+        ..base
+    }
+}
+
+/// Where the middle of `shape` is at `time` (its box centre carried along
+/// its motion); `None` for unbounded shapes.
+fn center_at(shape: &glint::shape::Shape, time: f32) -> Option<Vec3> {
+    match shape {
+        glint::shape::Shape::Moving(m) => {
+            let inner = center_at(&m.shape, time)?;
+            Some((m.parent * m.motion.matrix(time)).transform_point3(inner))
+        }
+        other => {
+            let b = other.bounds();
+            b.is_finite().then(|| b.center())
+        }
+    }
+}
+
+/// Every accelerator agrees with brute force on timed rays through moving
+/// objects, whose boxes cover their whole path.
+#[test]
+fn moving_objects_and_timed_rays() {
+    let kinds = [
+        AccelKind::Grid { res: None },
+        AccelKind::Grid {
+            res: Some([7, 3, 5]),
+        },
+        AccelKind::Octree,
+        AccelKind::Bvh(Split::Sah),
+        AccelKind::Bvh(Split::Median),
+        AccelKind::Bvh(Split::Midpoint),
+        AccelKind::Bvh4,
+        AccelKind::BvhHierarchy,
+        AccelKind::OctreeInner,
+        AccelKind::NestedGrid {
+            threshold: 16,
+            depth: 2,
+        },
+    ];
+    let mut rays = 0;
+    let mut hits = 0;
+    for seed in 0..24u64 {
+        let sc = moving_scene(seed);
+        for flatten in [true, false] {
+            let opts = |accel| BuildOptions { accel, flatten };
+            let brute = World::build(&sc, opts(AccelKind::None));
+            let worlds: Vec<World> = kinds.iter().map(|&k| World::build(&sc, opts(k))).collect();
+            let mut r = Rng::new(seed ^ 0x7173);
+            let mut c = Counters::default();
+            for i in 0..600 {
+                let q = random_query(&mut r, &brute, false);
+                let time = r.f();
+                // Half the rays aim at where a random primitive is at their time.
+                let aim = if r.chance(0.5) && !brute.prims.is_empty() {
+                    center_at(&brute.prims[r.below(brute.prims.len())].shape, time)
+                        .filter(|c| c.is_finite() && (*c - q.ray.origin).length() > 1e-3)
+                } else {
+                    None
+                };
+                let ray = match aim {
+                    Some(c) => Ray::new(q.ray.origin, c - q.ray.origin).at_time(time),
+                    None => q.ray.at_time(time),
+                };
+                let want = brute.intersect(&ray, q.tmin, q.tmax, &mut c);
+                let want_occ = brute.occluded(&ray, q.tmin, q.tmax, &mut c);
+                hits += usize::from(want.is_some());
+                for w in &worlds {
+                    let got = w.intersect(&ray, q.tmin, q.tmax, &mut c);
+                    let mut ties = 0;
+                    assert!(
+                        same_hit(
+                            want.map(|h| (h.prim, h.t)),
+                            got.map(|h| (h.prim, h.t)),
+                            &mut ties
+                        ),
+                        "{} (flatten {flatten}), moving scene {seed}, ray {i}: {ray:?}\n\
+                         brute {want:?}\ngot {got:?}",
+                        w.accel.describe()
+                    );
+                    assert_eq!(
+                        want_occ,
+                        w.occluded(&ray, q.tmin, q.tmax, &mut c),
+                        "{} occlusion, moving scene {seed}, ray {i}",
+                        w.accel.describe()
+                    );
+                }
+                rays += 1;
+            }
+        }
+    }
+    println!(
+        "moving objects: {rays} timed rays ({hits} hits) x {} accelerators",
+        kinds.len()
+    );
+    assert!(hits > rays / 10, "too few hits to mean anything: {hits}");
 }

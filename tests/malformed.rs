@@ -224,7 +224,7 @@ const CASES: &[Case] = &[
         "unknown_block.txt",
         8,
         1,
-        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group), found 'Light'",
+        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group, Samples, AmbientOcclusion), found 'Light'",
     ),
     case(
         "unknown_field.txt",
@@ -248,7 +248,7 @@ const CASES: &[Case] = &[
         "stray_close_brace.txt",
         7,
         1,
-        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group), found '}'",
+        "expected a block (OrthographicCamera, PerspectiveCamera, Lights, Background, Materials, Group, Samples, AmbientOcclusion), found '}'",
     ),
     case(
         "missing_camera_brace.txt",
@@ -379,6 +379,92 @@ const CASES: &[Case] = &[
         2,
         6,
         "expected 3 numbers after 'v', found end of line",
+    ),
+    // Distribution ray tracing's blocks (area lights, glossiness, lens and
+    // shutter, keyframes, ambient occlusion, sample counts).
+    case(
+        "area_flat_quad.txt",
+        11,
+        47,
+        "expected an edge2 not parallel to edge1 (a quad with an area), found '2 0 0'",
+    ),
+    case(
+        "area_two_shapes.txt",
+        12,
+        9,
+        "expected one shape per AreaLight, found a second shape 'sphere'",
+    ),
+    case(
+        "area_missing_power.txt",
+        13,
+        5,
+        "expected 'power' in AreaLight, found '}'",
+    ),
+    case(
+        "area_zero_radius.txt",
+        11,
+        50,
+        "expected a positive radius, found '0'",
+    ),
+    case(
+        "bad_glossiness.txt",
+        10,
+        73,
+        "expected a glossiness from 0 to 1, found '1.5'",
+    ),
+    case(
+        "aperture_without_focus.txt",
+        7,
+        1,
+        "expected 'focusDistance (with an aperture)' in PerspectiveCamera, found '}'",
+    ),
+    case(
+        "shutter_backwards.txt",
+        6,
+        15,
+        "expected a shutter close time not before the open time, found '0.5'",
+    ),
+    case(
+        "camera_keyframe_order.txt",
+        8,
+        21,
+        "expected a keyframe time after the previous one (1), found '0.5'",
+    ),
+    case(
+        "camera_too_few_keyframes.txt",
+        9,
+        1,
+        "expected 3 keyframes (numKeyframes 3), found '}' after 2 keyframes",
+    ),
+    case(
+        "keyframe_time_order.txt",
+        13,
+        25,
+        "expected a keyframe time after the previous one (0.5), found '0.5'",
+    ),
+    case(
+        "keyframe_zero_scale.txt",
+        12,
+        35,
+        "expected a non-zero scale, found '0'",
+    ),
+    case(
+        "too_few_keyframes.txt",
+        13,
+        9,
+        "expected 2 keyframes (numKeyframes 2), found 'Sphere' after 1 keyframe",
+    ),
+    case(
+        "ao_zero_distance.txt",
+        10,
+        14,
+        "expected a positive distance, found '0'",
+    ),
+    case(
+        "zero_samples.txt",
+        9,
+        12,
+        "expected a sample count from 1 to 4096, found '0'",
     ),
     case(
         "bad_number.obj",

@@ -251,6 +251,7 @@ fn own_whitted() -> Scene {
                 reflective: Vec3::splat(0.1),
                 transparent: Vec3::splat(0.9),
                 ior: 1.5,
+                glossiness: 0.0,
             }),
         ],
         root: Node::Group(vec![
@@ -276,6 +277,7 @@ fn own_whitted() -> Scene {
                 4,
             ),
         ]),
+        effects: Default::default(),
     }
 }
 
@@ -416,6 +418,7 @@ fn own_mesh_room() -> Scene {
                 shape(Shape::Mesh(Arc::new(cube)), 2),
             ),
         ]),
+        effects: Default::default(),
     }
 }
 

@@ -97,6 +97,7 @@ fn materials() -> Vec<Material> {
         reflective: Vec3::splat(0.2),
         transparent: Vec3::splat(0.9),
         ior: 1.5,
+        glossiness: 0.0,
     };
     let both = Phong {
         diffuse: Vec3::splat(0.3),
@@ -105,6 +106,7 @@ fn materials() -> Vec<Material> {
         reflective: Vec3::splat(0.5),
         transparent: Vec3::splat(0.5),
         ior: 2.4,
+        glossiness: 0.0,
     };
     vec![
         Material::Phong(matte),
@@ -130,6 +132,7 @@ fn scene(camera: Camera, lights: Vec<Light>, objects: Vec<Node>) -> Scene {
         },
         materials: materials(),
         root: Node::Group(objects),
+        effects: Default::default(),
     }
 }
 
@@ -492,6 +495,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
             reflective: Vec3::splat(0.5),
             transparent: Vec3::splat(0.5),
             ior,
+            glossiness: 0.0,
         })
     };
     extreme.materials.push(glassy(3e38, 1.0));
@@ -516,6 +520,7 @@ fn integrators() -> Vec<Whitted> {
                     shade_back,
                     transparent_shadows,
                     texture_space,
+                    ..Whitted::default()
                 });
             }
         }

@@ -128,6 +128,7 @@ fn floor_scene(glass: Phong) -> Scene {
             },
             sphere(Vec3::new(0.0, 2.0, 0.0), 0.5, 1),
         ]),
+        effects: Default::default(),
     }
 }
 

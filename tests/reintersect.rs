@@ -261,6 +261,7 @@ fn scene(root: Node) -> Scene {
         background: Background::default(),
         materials: vec![],
         root,
+        effects: Default::default(),
     }
 }
 

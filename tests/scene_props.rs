@@ -213,7 +213,7 @@ proptest! {
             }
         };
         let world = World::build(&scene, BuildOptions::default());
-        let camera = CameraModel::new(&scene.camera);
+        let camera = CameraModel::new(&world.camera);
         let integrator = Whitted {
             bounces: 3,
             weight_cutoff: 0.0,

@@ -443,6 +443,7 @@ fn object_space_textures_follow_their_object() {
                 material: Some(2),
             }),
         },
+        effects: Default::default(),
     };
     let colour_at = |scene: &Scene, x: f32, space: TextureSpace| {
         let world = World::build(scene, BuildOptions::default());

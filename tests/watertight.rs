@@ -78,6 +78,7 @@ fn scene() -> Scene {
                 material: None,
             }),
         },
+        effects: Default::default(),
     }
 }
 

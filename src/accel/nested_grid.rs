@@ -13,6 +13,15 @@
 //! on down to `depth` levels below the coarse one. A crowded cell's own list
 //! is dropped: its finer grid holds every one of its primitives.
 //!
+//! A finer grid is built only where it pays, by the octree's surface-area
+//! estimate: a ray through the cell crosses finer cell `c` with probability
+//! about `area(c) / area(cell)`, so it costs about
+//! `Σ area(c)/area(cell) · (1 + n_c)` against `n` for the list. Primitives
+//! that all span the whole cell (big overlapping boxes, such as moving
+//! objects whose boxes cover their path) would be copied into every finer
+//! cell at every level, `cells^depth · n` entries; that grid is dropped
+//! before it recurses, which bounds the memory.
+//!
 //! Exactness is the uniform grid's rule at every level: the closest hit is
 //! kept across cells and levels (one mailbox for the whole ray), and the walk
 //! stops once it lies before the exit of the cell just finished, whatever
@@ -32,6 +41,8 @@ use crate::stats::Counters;
 const COARSE_DENSITY: f32 = 1.0;
 /// Cells per `∛n` along the longest axis of a finer grid.
 const FINE_DENSITY: f32 = 2.0;
+/// Cost of stepping into one cell, in primitive tests (the octree's value).
+const CELL_COST: f32 = 1.0;
 
 /// One level: a lattice, its cells' primitives and the finer grids of its
 /// crowded cells.
@@ -73,7 +84,9 @@ impl NestedGrid {
             margin: m,
             threshold: threshold.max(1) as usize,
         };
-        let top = b.level(region, &ids, COARSE_DENSITY, depth);
+        let top = b
+            .level(region, &ids, COARSE_DENSITY, depth, false)
+            .expect("the coarse level is always built");
         Self {
             top,
             bounds,
@@ -201,8 +214,16 @@ struct Builder<'a> {
 
 impl Builder<'_> {
     /// A grid over `region` holding `ids`, with `levels` more levels allowed
-    /// below it.
-    fn level(&self, region: Aabb, ids: &[u32], density: f32, levels: u32) -> Level {
+    /// below it; `None` if `must_pay` and a ray would test about as many
+    /// primitives in it as in the plain list `ids` (see the module comment).
+    fn level(
+        &self,
+        region: Aabb,
+        ids: &[u32],
+        density: f32,
+        levels: u32,
+        must_pay: bool,
+    ) -> Option<Level> {
         let res = if region.is_empty() {
             [1, 1, 1]
         } else {
@@ -211,6 +232,16 @@ impl Builder<'_> {
         let lattice = Lattice::new(region, res);
         let (offsets, items) = fill(self.prims, ids, &lattice, self.margin);
         let cells = lattice.cells();
+        if must_pay {
+            // Every cell has the same area: Σ area(c)/area · (1 + n_c).
+            let share = lattice.cell_bounds([0, 0, 0]).surface_area() / region.surface_area();
+            let cost = share * (CELL_COST * cells as f32 + items.len() as f32);
+            // A NaN cost (a region without area) does not pay either.
+            let pays = cost < ids.len() as f32;
+            if !pays {
+                return None;
+            }
+        }
         let mut child = vec![0u32; cells];
         let mut children = Vec::new();
         // Compacted lists: a crowded cell's primitives move to its finer grid.
@@ -223,21 +254,30 @@ impl Builder<'_> {
                 let cb = lattice.cell_bounds(index_of(&lattice, k));
                 // Padded like the cells the list was filled from, so the finer
                 // grid covers every hit the coarse cell's primitives have in it.
-                let sub = self.level(padded(&cb, self.margin), list, FINE_DENSITY, levels - 1);
-                children.push(sub);
-                child[k] = children.len() as u32;
-            } else {
-                new_items.extend_from_slice(list);
+                let sub = self.level(
+                    padded(&cb, self.margin),
+                    list,
+                    FINE_DENSITY,
+                    levels - 1,
+                    true,
+                );
+                if let Some(sub) = sub {
+                    children.push(sub);
+                    child[k] = children.len() as u32;
+                    new_offsets.push(new_items.len() as u32);
+                    continue;
+                }
             }
+            new_items.extend_from_slice(list);
             new_offsets.push(new_items.len() as u32);
         }
-        Level {
+        Some(Level {
             lattice,
             offsets: new_offsets,
             items: new_items,
             child,
             children,
-        }
+        })
     }
 }
 
@@ -359,16 +399,53 @@ mod tests {
     }
 
     #[test]
-    fn depth_one_with_threshold_zero_is_finer_everywhere() {
-        let prims = soup(22, 300);
+    fn depth_one_with_threshold_zero_is_finer_wherever_it_pays() {
+        // 30 tight clusters of 10 tiny spheres: a finer grid separates them.
+        let mut r = crate::accel::testutil::Rng::new(22);
+        let mut prims = Vec::new();
+        for _ in 0..30 {
+            let c = r.v(-5.0, 5.0);
+            prims.extend((0..10).map(|_| sphere(c + r.v(-0.05, 0.05), 1e-3)));
+        }
         let g = NestedGrid::new(&prims, all(&prims), 0, 1);
-        // Every non-empty coarse cell holds more than 0 (clamped to 1) only
-        // when it has two or more; those all got a finer grid.
+        // A finer grid over n points costs about 2·∛n cells a ray, so it pays
+        // from n = 3 on: every cell of 4 or more got one.
         for (k, &c) in g.top.child.iter().enumerate() {
             let n = (g.top.offsets[k + 1] - g.top.offsets[k]) as usize;
-            assert!(c > 0 || n <= 1, "cell {k} kept {n} primitives");
+            assert!(c > 0 || n <= 3, "cell {k} kept {n} primitives");
         }
+        assert!(g.subgrids() >= 20, "{} finer grids", g.subgrids());
         assert_agrees(&g, &prims, 2000);
+    }
+
+    #[test]
+    fn primitives_spanning_every_cell_get_no_finer_grid() {
+        // 200 ellipsoids around one point, tested against cells by their
+        // boxes (as moving objects are, by their path's box): each box
+        // covers every finer cell, so finer grids would hold cells × 200
+        // copies a level and test no fewer primitives.
+        use crate::math::Mat4;
+        use crate::shape::{Shape, Sphere, Transformed};
+        let mut r = crate::accel::testutil::Rng::new(5);
+        let prims: Vec<Primitive> = (0..200)
+            .map(|_| {
+                let m = Mat4::from_translation(r.v(-0.1, 0.1))
+                    * Mat4::from_scale(Vec3::new(3.0, 2.0, 1.0 + r.f()));
+                let s = Shape::Sphere(Sphere {
+                    center: Vec3::ZERO,
+                    radius: 1.0,
+                });
+                crate::accel::testutil::prim(Shape::Transformed(Box::new(
+                    Transformed::new(s, m).expect("invertible"),
+                )))
+            })
+            .collect();
+        let g = NestedGrid::new(&prims, all(&prims), 16, 3);
+        assert_eq!(g.subgrids(), 0);
+        // The coarse grid alone: at most every primitive in every cell.
+        let bound = (g.top.lattice.cells() * (prims.len() + 3)) * 4 + 4;
+        assert!(g.memory_bytes() <= bound, "{} bytes", g.memory_bytes());
+        assert_agrees(&g, &prims, 500);
     }
 
     #[test]

@@ -3,15 +3,17 @@
 //! [`Integrator`] trait is what the render loop calls, so new integrators
 //! (ambient occlusion, path tracing) plug in without touching the loop.
 
+pub mod ao;
 mod observer;
 pub mod optics;
 mod whitted;
 
+pub use ao::{AmbientOcclusion, AoSettings};
 pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
 pub use whitted::Whitted;
 
 use crate::math::{Ray, Vec3};
-use crate::render::SampleStream;
+use crate::sampler::SampleStream;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 
@@ -37,24 +39,26 @@ pub trait Integrator: Sync {
 }
 
 impl Integrator for Whitted {
-    /// The Whitted tree is deterministic: it takes no stream dimensions.
+    /// The classic tree takes no stream dimensions; area lights, glossy
+    /// lobes and ambient occlusion take theirs as they are met.
     #[inline]
     fn li(
         &self,
         world: &World,
         ray: &Ray,
         tmin: f32,
-        _stream: &mut SampleStream,
+        stream: &mut SampleStream,
         counters: &mut Counters,
         observer: &mut impl RayObserver,
     ) -> (Vec3, Option<Hit>) {
-        self.trace(
+        self.trace_sampled(
             world,
             ray,
             tmin,
             RayKind::Primary,
             0,
             1.0,
+            stream,
             counters,
             observer,
         )

@@ -11,6 +11,8 @@ pub enum RayKind {
     Reflected,
     /// Refraction.
     Transmitted,
+    /// An ambient-occlusion probe of the hemisphere.
+    Occlusion,
 }
 
 /// Watches the rays an integrator spawns. Rendering passes [`NoObserver`],

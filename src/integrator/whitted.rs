@@ -1,12 +1,23 @@
 //! The Whitted ray tree: local Phong shading with shadow rays, plus one
 //! reflected and one refracted child ray per hit, recursing until `bounces`
 //! or until a branch's contribution drops below `weight_cutoff`.
+//!
+//! With distribution effects it is Cook's distribution ray tracer: area
+//! lights get `shadow_samples` shadow rays stratified over their surface,
+//! glossy materials `glossy_samples` rays over their lobe, and the ambient
+//! term an ambient-occlusion factor; every choice is a dimension of the
+//! camera sample's stream. Without them (point and directional lights,
+//! mirrors, no AO) the tree takes no stream dimension and is exactly the
+//! classic one.
 
+use super::ao::{unoccluded, AoSettings};
 use super::optics::{reflect, refract};
 use super::{RayKind, RayObserver};
-use crate::light::incident;
+use crate::light::{incident, is_delta, sample_light};
+use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
-use crate::math::{Ray, SurfacePoint, Vec3, SHADOW_EPSILON};
+use crate::math::{Ray, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
+use crate::sampler::{SampleStream, Sampler};
 use crate::scene::Light;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
@@ -28,6 +39,14 @@ pub struct Whitted {
     pub transparent_shadows: bool,
     /// Space in which textures are looked up.
     pub texture_space: TextureSpace,
+    /// Shadow rays per area light per shaded point.
+    pub shadow_samples: u32,
+    /// Rays over a glossy lobe at the first glossy hit of a camera ray
+    /// (deeper glossy hits take one, so the tree does not grow as
+    /// `glossy_samples^depth`).
+    pub glossy_samples: u32,
+    /// Multiply the ambient term by the ambient occlusion of the point.
+    pub ambient_occlusion: Option<AoSettings>,
 }
 
 impl Default for Whitted {
@@ -39,12 +58,18 @@ impl Default for Whitted {
             shade_back: false,
             transparent_shadows: false,
             texture_space: TextureSpace::World,
+            shadow_samples: 1,
+            glossy_samples: 1,
+            ambient_occlusion: None,
         }
     }
 }
 
 impl Whitted {
     /// Colour seen along `ray` (hits with `t > tmin`), and the hit itself.
+    /// Any sampled effect takes its values from the pixel-centre stream of a
+    /// one-sample uniform sampler (the centre of each light, lobe and
+    /// hemisphere stratum).
     #[allow(clippy::too_many_arguments)]
     pub fn trace(
         &self,
@@ -57,11 +82,32 @@ impl Whitted {
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> (Vec3, Option<Hit>) {
+        let sampler = Sampler::fixed(Vec2::splat(0.5));
+        let mut stream = sampler.stream((0, 0), 0);
+        stream.next_2d();
+        self.trace_sampled(world, ray, tmin, kind, depth, weight, &mut stream, c, obs)
+    }
+
+    /// [`Whitted::trace`] taking every random decision from `stream`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_sampled(
+        &self,
+        world: &World,
+        ray: &Ray,
+        tmin: f32,
+        kind: RayKind,
+        depth: u32,
+        weight: f32,
+        stream: &mut SampleStream,
+        c: &mut Counters,
+        obs: &mut impl RayObserver,
+    ) -> (Vec3, Option<Hit>) {
         match kind {
             RayKind::Primary => c.primary += 1,
             RayKind::Reflected => c.reflected += 1,
             RayKind::Transmitted => c.refracted += 1,
             RayKind::Shadow => c.shadow += 1,
+            RayKind::Occlusion => c.occlusion += 1,
         }
         let hit = world.intersect(ray, tmin, f32::INFINITY, c);
         obs.ray(
@@ -74,7 +120,10 @@ impl Whitted {
         );
         match hit {
             None => (world.background.color, None),
-            Some(h) => (self.shade(world, ray, &h, depth, weight, c, obs), Some(h)),
+            Some(h) => (
+                self.shade(world, ray, &h, depth, weight, stream, c, obs),
+                Some(h),
+            ),
         }
     }
 
@@ -86,6 +135,7 @@ impl Whitted {
         hit: &Hit,
         depth: u32,
         weight: f32,
+        stream: &mut SampleStream,
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> Vec3 {
@@ -100,7 +150,17 @@ impl Whitted {
         let m = self.material_at(world, hit);
 
         let mut color = world.background.ambient * m.diffuse;
+        if let Some(ao) = &self.ambient_occlusion {
+            if color != Vec3::ZERO {
+                let from = hit.surface_point();
+                color *= unoccluded(world, &from, n, ray.time, ao, depth, stream, c, obs);
+            }
+        }
         for light in &world.lights {
+            if !is_delta(light) {
+                color += self.area_light(world, ray, hit, light, &m, n, d, depth, stream, c, obs);
+                continue;
+            }
             let inc = incident(light, p);
             let reflected = phong_light(&m, n, inc.to_light, -d, inc.color);
             if reflected == Vec3::ZERO {
@@ -111,10 +171,11 @@ impl Whitted {
             if self.shadows && inc.to_light != Vec3::ZERO {
                 let target = match light {
                     Light::Point { position, .. } => ShadowTarget::Point(*position),
-                    Light::Directional { .. } => ShadowTarget::Direction(inc.to_light),
+                    _ => ShadowTarget::Direction(inc.to_light),
                 };
-                color += reflected
-                    * self.light_through(world, hit.surface_point(), target, depth, c, obs);
+                let from = hit.surface_point();
+                color +=
+                    reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
             } else {
                 color += reflected;
             }
@@ -126,14 +187,17 @@ impl Whitted {
         let refl_w = weight * m.reflective.max_element();
         if refl_w > 0.0 && refl_w >= self.weight_cutoff {
             let r = reflect(d, n);
-            let child = hit.spawn_ray(r);
-            let (rc, _) = self.trace(
+            let rc = self.spread(
                 world,
-                &child,
-                0.0,
+                ray,
+                &hit.surface_point(),
+                r,
+                n,
+                m.glossiness,
                 RayKind::Reflected,
-                depth + 1,
+                depth,
                 refl_w,
+                stream,
                 c,
                 obs,
             );
@@ -144,14 +208,17 @@ impl Whitted {
             // Entering or leaving is decided by the side of the geometric normal.
             let (n_i, n_t) = if back { (m.ior, 1.0) } else { (1.0, m.ior) };
             if let Some(t) = refract(d, n, n_i, n_t) {
-                let child = hit.spawn_ray(t);
-                let (tc, _) = self.trace(
+                let tc = self.spread(
                     world,
-                    &child,
-                    0.0,
+                    ray,
+                    &hit.surface_point(),
+                    t,
+                    -n,
+                    m.glossiness,
                     RayKind::Transmitted,
-                    depth + 1,
+                    depth,
                     trans_w,
+                    stream,
                     c,
                     obs,
                 );
@@ -159,6 +226,94 @@ impl Whitted {
             }
         }
         color
+    }
+
+    /// Colour arriving along the child direction `axis` from the surface
+    /// point `from`: one ray for a mirror or clear glass (`glossiness` 0),
+    /// else the mean of rays over the glossy lobe around `axis` on the `side`
+    /// of the surface. Child rays are spawned clear of `from`'s error bound
+    /// and keep `ray`'s time.
+    #[allow(clippy::too_many_arguments)]
+    fn spread(
+        &self,
+        world: &World,
+        ray: &Ray,
+        from: &SurfacePoint,
+        axis: Vec3,
+        side: Vec3,
+        glossiness: f32,
+        kind: RayKind,
+        depth: u32,
+        weight: f32,
+        stream: &mut SampleStream,
+        c: &mut Counters,
+        obs: &mut impl RayObserver,
+    ) -> Vec3 {
+        if glossiness <= 0.0 {
+            let child = from.spawn_ray(axis).at_time(ray.time);
+            return self
+                .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
+                .0;
+        }
+        let e = lobe_exponent(glossiness);
+        let k = if depth == 0 {
+            self.glossy_samples.max(1)
+        } else {
+            1
+        };
+        let mut sum = Vec3::ZERO;
+        for u in stream.split_2d(k) {
+            let w = sample_lobe(axis, side, e, u);
+            let child = from.spawn_ray(w).at_time(ray.time);
+            c.glossy += 1;
+            sum += self
+                .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
+                .0;
+        }
+        sum / k as f32
+    }
+
+    /// Light from an area light: the mean over `shadow_samples` points of it,
+    /// stratified by one split dimension of the stream, each with its own
+    /// shadow ray (the penumbra is the fraction of them blocked), from the
+    /// hit to the sampled point with both ends offset out of their error
+    /// bounds.
+    #[allow(clippy::too_many_arguments)]
+    fn area_light(
+        &self,
+        world: &World,
+        ray: &Ray,
+        hit: &Hit,
+        light: &Light,
+        m: &crate::scene::Phong,
+        n: Vec3,
+        d: Vec3,
+        depth: u32,
+        stream: &mut SampleStream,
+        c: &mut Counters,
+        obs: &mut impl RayObserver,
+    ) -> Vec3 {
+        let k = self.shadow_samples.max(1);
+        let p = hit.point;
+        let mut sum = Vec3::ZERO;
+        for u in stream.split_2d(k) {
+            let inc = sample_light(light, p, u);
+            let reflected = phong_light(m, n, inc.to_light, -d, inc.color);
+            if reflected == Vec3::ZERO {
+                continue;
+            }
+            if self.shadows && inc.to_light != Vec3::ZERO {
+                let target = match inc.at {
+                    Some(at) => ShadowTarget::Surface(at),
+                    None => ShadowTarget::Point(p + inc.to_light * inc.distance),
+                };
+                let from = hit.surface_point();
+                sum += reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
+            } else {
+                sum += reflected;
+            }
+        }
+        sum / k as f32
     }
 
     /// The Phong parameters at a hit. World-space lookups (the 6.837
@@ -178,12 +333,15 @@ impl Whitted {
     }
 
     /// Fraction of a light's colour that reaches the surface point `from`
-    /// from `target`: 0 or 1 with opaque shadows; with transparent shadows
-    /// the product of the `transparentColor` of everything in between.
+    /// from `target` at instant `time`: 0 or 1 with opaque shadows; with
+    /// transparent shadows the product of the `transparentColor` of
+    /// everything in between.
+    #[allow(clippy::too_many_arguments)]
     fn light_through(
         &self,
         world: &World,
         from: SurfacePoint,
+        time: f32,
         target: ShadowTarget,
         depth: u32,
         c: &mut Counters,
@@ -191,7 +349,7 @@ impl Whitted {
     ) -> Vec3 {
         c.shadow += 1;
         if !self.transparent_shadows {
-            let (shadow, tmax) = target.ray_from(&from);
+            let (shadow, tmax) = target.ray_from(&from, time);
             let blocked = world.occluded(&shadow, 0.0, tmax, c);
             obs.shadow(&shadow, tmax, blocked, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
@@ -202,7 +360,7 @@ impl Whitted {
         // its hit; the cap guards against a ray trapped between coincident
         // surfaces.
         for _ in 0..64 {
-            let (ray, tmax) = target.ray_from(&from);
+            let (ray, tmax) = target.ray_from(&from, time);
             let Some(h) = world.intersect(&ray, 0.0, tmax, c) else {
                 obs.ray(RayKind::Shadow, &ray, tmax, depth, 0.0, None);
                 return filter;
@@ -225,16 +383,23 @@ enum ShadowTarget {
     Point(Vec3),
     /// Infinitely far along this unit direction.
     Direction(Vec3),
+    /// A sampled point of an area light's surface, with its error bound.
+    Surface(SurfacePoint),
 }
 
 impl ShadowTarget {
     /// The shadow ray from `from` and the `tmax` it is traced to: a point
     /// light's ray ends at the light (`t = 1`), kept `SHADOW_EPSILON` short
-    /// of it so a surface the light sits on does not shadow it.
-    fn ray_from(self, from: &SurfacePoint) -> (Ray, f32) {
-        match self {
+    /// of it so a surface the light sits on does not shadow it; an area
+    /// light's sample likewise, with its own end offset out of its error
+    /// bound too. The ray travels at instant `time` (motion blur: shadows
+    /// of moving objects are cast where they are at that instant).
+    fn ray_from(self, from: &SurfacePoint, time: f32) -> (Ray, f32) {
+        let (ray, tmax) = match self {
             ShadowTarget::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),
             ShadowTarget::Direction(d) => (from.spawn_ray(d), f32::INFINITY),
-        }
+            ShadowTarget::Surface(s) => (from.spawn_ray_to_surface(&s), 1.0 - SHADOW_EPSILON),
+        };
+        (ray.at_time(time), tmax)
     }
 }

@@ -1,6 +1,11 @@
-//! Light sampling: what a light sends to a surface point.
+//! Light sampling: what a light sends to a surface point. Point and
+//! directional lights send it along one direction ([`incident`]); area lights
+//! ([`area`]) are sampled: [`sample_light`] takes a 2-D sample choosing a
+//! point of the light.
 
-use crate::math::Vec3;
+pub mod area;
+
+use crate::math::{SurfacePoint, Vec2, Vec3};
 use crate::scene::Light;
 
 /// Light arriving at a point from one light.
@@ -13,11 +18,48 @@ pub struct Incident {
     /// Distance to the light (infinite for directional lights); shadow rays
     /// stop there.
     pub distance: f32,
+    /// The chosen point of an area light's surface, with a bound on its
+    /// floating-point error and the light's normal there: shadow rays go to
+    /// it with both ends offset ([`SurfacePoint::spawn_ray_to_surface`]).
+    /// `None` for point and directional lights.
+    pub at: Option<SurfacePoint>,
 }
 
-/// What `light` sends to point `p`.
+impl Incident {
+    /// No light at all.
+    pub const NONE: Incident = Incident {
+        to_light: Vec3::ZERO,
+        color: Vec3::ZERO,
+        distance: 0.0,
+        at: None,
+    };
+}
+
+/// Whether the light comes from a single point or direction (one shadow ray
+/// says everything) rather than from a surface that must be sampled.
+pub fn is_delta(light: &Light) -> bool {
+    !matches!(light, Light::Area { .. })
+}
+
+/// What `light` sends to point `p` through the light point chosen by `u`
+/// (ignored by point and directional lights), divided by the density of
+/// that choice: the mean over stratified `u` is the light's contribution.
+pub fn sample_light(light: &Light, p: Vec3, u: Vec2) -> Incident {
+    match light {
+        Light::Area {
+            shape,
+            color,
+            power,
+        } => area::sample(shape, area::radiance(shape, *color, *power), p, u),
+        _ => incident(light, p),
+    }
+}
+
+/// What `light` sends to point `p`; an area light is taken at the centre of
+/// its sample domain (use [`sample_light`] to sample it).
 pub fn incident(light: &Light, p: Vec3) -> Incident {
     match light {
+        Light::Area { .. } => sample_light(light, p, Vec2::splat(0.5)),
         // Directions are normalised in f64: in f32, the length of a vector
         // longer than ~1e19 overflows (shorter than ~1e-19 underflows) and the
         // light was silently lost.
@@ -25,6 +67,7 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
             to_light: -direction.as_dvec3().normalize_or_zero().as_vec3(),
             color: *color,
             distance: f32::INFINITY,
+            at: None,
         },
         Light::Point {
             position,
@@ -37,6 +80,7 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
                 to_light: d.normalize_or_zero().as_vec3(),
                 color: *color * attenuation_factor(*attenuation, dist as f32),
                 distance: dist as f32,
+                at: None,
             }
         }
     }

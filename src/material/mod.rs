@@ -1,6 +1,7 @@
 //! Materials at a surface point: textures resolve to Phong parameters, and
 //! the Phong model turns one light into reflected colour.
 
+pub mod glossy;
 mod noise;
 mod phong;
 mod texture;
@@ -87,6 +88,7 @@ mod tests {
             reflective: Vec3::splat(0.3),
             transparent: Vec3::splat(0.7),
             ior: 2.0,
+            glossiness: 0.0,
         }
     }
 
@@ -98,6 +100,7 @@ mod tests {
             reflective: Vec3::new(0.1, 0.0, 0.05),
             transparent: Vec3::ZERO,
             ior: 1.0,
+            glossiness: 0.0,
         }
     }
 

@@ -1,20 +1,50 @@
 use super::float::offset_ray_origin;
 use glam::Vec3;
 
-/// A ray `origin + t * dir`. `dir` is not necessarily unit length: rays carried
-/// into an object's space keep the world-space `t` by keeping the scaled direction.
+/// A ray `origin + t * dir` at an instant `time`. `dir` is not necessarily
+/// unit length: rays carried into an object's space keep the world-space `t`
+/// by keeping the scaled direction.
+///
+/// Why the time lives in the ray: motion blur needs every ray of one camera
+/// sample (shadow, reflected, refracted) to see the scene at the same
+/// instant, and moving shapes read it where they intersect; nothing between
+/// the camera and the shape has to know about motion.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     /// Start point.
     pub origin: Vec3,
     /// Direction (any non-zero length).
     pub dir: Vec3,
+    /// Instant within the shutter interval at which the ray travels (0 for
+    /// scenes without motion).
+    pub time: f32,
 }
 
 impl Ray {
-    /// Builds a ray from an origin and a direction.
+    /// Builds a ray from an origin and a direction, at time 0.
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        Self { origin, dir }
+        Self {
+            origin,
+            dir,
+            time: 0.0,
+        }
+    }
+
+    /// The same ray at instant `time`.
+    #[inline]
+    pub fn at_time(self, time: f32) -> Self {
+        Self { time, ..self }
+    }
+
+    /// A ray spawned from this one (shadow, reflected, refracted): it lives
+    /// at the same instant.
+    #[inline]
+    pub fn child(&self, origin: Vec3, dir: Vec3) -> Self {
+        Self {
+            origin,
+            dir,
+            time: self.time,
+        }
     }
 
     /// The point at parameter `t`.

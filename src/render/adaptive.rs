@@ -67,9 +67,11 @@ impl<I: Integrator> Tracer<'_, I> {
         let (w, h) = self.settings.size;
         let s = self.steps;
         let o = Vec2::new((x % s) as f32 / s as f32, (y % s) as f32 / s as f32);
-        let ray = self.camera.ray(screen_point(x / s, y / s, o, w, h));
         let key = (x as u64) | (y as u64) << 32;
         let mut stream = self.settings.sampler.stream_for_key(key);
+        let ray = self
+            .camera
+            .sample_ray(screen_point(x / s, y / s, o, w, h), &mut stream);
         let (color, hit) = self.integrator.li(
             self.world,
             &ray,

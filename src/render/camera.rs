@@ -1,9 +1,13 @@
-use crate::math::{Ray, Vec2, Vec3};
-use crate::scene::Camera;
+use super::SampleStream;
+use crate::light::area::concentric_disk;
+use crate::math::{Motion, Ray, Vec2, Vec3};
+use crate::scene::{Camera, Lens};
+use glam::DVec3;
+use std::sync::Arc;
 
 /// A camera ready to make rays: an orthonormal frame built from the scene's
-/// direction and approximate up vector.
-#[derive(Clone, Copy, Debug)]
+/// direction and approximate up vector; optionally moving.
+#[derive(Clone, Debug)]
 pub struct CameraModel {
     center: Vec3,
     direction: Vec3,
@@ -12,6 +16,58 @@ pub struct CameraModel {
     /// Orthographic: world size of the screen; perspective: `2·tan(angle/2)`.
     span: f32,
     perspective: bool,
+    lens: Lens,
+    /// The moving camera's rig, if it moves.
+    rig: Option<Arc<Rig>>,
+}
+
+/// A moving camera: the rig's keyframed motion carries the camera's
+/// centre, direction and up, in world space, while the image is computed in
+/// rendering space (see [`crate::world`]).
+#[derive(Debug)]
+struct Rig {
+    /// The camera at the rig's rest pose, in rendering space.
+    base: Camera,
+    motion: Arc<Motion>,
+    /// Where the rendering-space origin lies in world space.
+    origin: DVec3,
+}
+
+impl Rig {
+    /// The camera at instant `time`. The pose is applied in f64 in world
+    /// space (rendering space plus `origin`), then moved back and rounded
+    /// once, so a scene far from the origin moves its camera as precisely
+    /// as one near it.
+    fn at(&self, time: f32) -> Camera {
+        let m = self.motion.matrix(time).as_dmat4();
+        let o = self.origin;
+        let point = |p: Vec3| (m.transform_point3(p.as_dvec3() + o) - o).as_vec3();
+        let vector = |v: Vec3| m.transform_vector3(v.as_dvec3()).as_vec3();
+        match self.base {
+            Camera::Orthographic {
+                center,
+                direction,
+                up,
+                size,
+            } => Camera::Orthographic {
+                center: point(center),
+                direction: vector(direction),
+                up: vector(up),
+                size,
+            },
+            Camera::Perspective {
+                center,
+                direction,
+                up,
+                angle_deg,
+            } => Camera::Perspective {
+                center: point(center),
+                direction: vector(direction),
+                up: vector(up),
+                angle_deg,
+            },
+        }
+    }
 }
 
 impl CameraModel {
@@ -52,7 +108,95 @@ impl CameraModel {
             up,
             span,
             perspective,
+            lens: Lens::default(),
+            rig: None,
         }
+    }
+
+    /// The camera a render of `world` uses: the scene's camera in rendering
+    /// space with the scene's lens and shutter, on its rig if it moves.
+    pub fn of_world(world: &crate::world::World, effects: &crate::scene::Effects) -> Self {
+        let cam = CameraModel::new(&world.camera).with_lens(effects.lens);
+        match &effects.camera_motion {
+            Some(m) => cam.with_motion(&world.camera, m.clone(), world.origin),
+            None => cam,
+        }
+    }
+
+    /// The same camera carried by a rig moving along `motion` (world space);
+    /// `cam` is the camera in rendering space (as [`CameraModel::new`] takes
+    /// it) and `origin` the rendering-space origin in world space. Each
+    /// camera ray then starts from the camera's pose at the ray's time.
+    pub fn with_motion(self, cam: &Camera, motion: Arc<Motion>, origin: DVec3) -> Self {
+        let rig = Rig {
+            base: cam.clone(),
+            motion,
+            origin,
+        };
+        Self {
+            rig: Some(Arc::new(rig)),
+            ..self
+        }
+    }
+
+    /// The camera at instant `time` (itself, unless it moves).
+    pub fn at_time(&self, time: f32) -> CameraModel {
+        match &self.rig {
+            Some(rig) => CameraModel::new(&rig.at(time)).with_lens(self.lens),
+            None => self.clone(),
+        }
+    }
+
+    /// The same camera with a thin lens and shutter.
+    pub fn with_lens(self, lens: Lens) -> Self {
+        Self { lens, ..self }
+    }
+
+    /// The camera ray of one camera sample through screen point `s`: its
+    /// time is the stream's next 1-D value mapped onto the shutter interval
+    /// (only when the shutter is open for a while), its start the next 2-D
+    /// value mapped onto the lens (only with an aperture).
+    ///
+    /// Thin lens: every ray through screen point `s` passes through the point
+    /// where the pinhole ray meets the focus plane (at `focus_distance` along
+    /// the viewing direction), so that plane is sharp and a point at depth
+    /// `z` spreads over a disk of radius `aperture · |z − f| / z` on it.
+    pub fn sample_ray(&self, s: Vec2, stream: &mut SampleStream) -> Ray {
+        let [open, close] = self.lens.shutter;
+        let time = if self.lens.has_motion_blur() {
+            open + (close - open) * stream.next_1d()
+        } else {
+            open
+        };
+        match &self.rig {
+            // A moving camera: the frame at the ray's time makes the ray.
+            Some(rig) => CameraModel::new(&rig.at(time))
+                .with_lens(self.lens)
+                .lens_ray(s, time, stream),
+            None => self.lens_ray(s, time, stream),
+        }
+    }
+
+    /// The ray through `s` at `time`, through the lens point the stream's
+    /// next 2-D value picks (with an aperture).
+    fn lens_ray(&self, s: Vec2, time: f32, stream: &mut SampleStream) -> Ray {
+        let mut ray = self.ray(s);
+        ray.time = time;
+        if self.lens.has_depth_of_field() {
+            let l = concentric_disk(stream.next_2d()) * self.lens.aperture;
+            let offset = l.x * self.horizontal + l.y * self.up;
+            if self.perspective {
+                let focus = ray.at(self.lens.focus_distance / ray.dir.dot(self.direction));
+                ray.origin += offset;
+                ray.dir = (focus - ray.origin).normalize();
+            } else {
+                // Parallel rays: the lens tilts them towards the focus plane.
+                let focus = ray.at(self.lens.focus_distance);
+                ray.origin += offset;
+                ray.dir = (focus - ray.origin).normalize();
+            }
+        }
+        ray
     }
 
     /// The ray through screen point `s` in `[0,1]²` (the square spanned by

@@ -15,11 +15,15 @@ pub struct Phong {
     pub transparent: Vec3,
     /// Index of refraction of the inside of the surface.
     pub ior: f32,
+    /// Spread of the reflected and refracted rays, `0..=1` (a roughness):
+    /// 0 is a perfect mirror and clear glass, larger values blur them over
+    /// a Phong lobe (see `material::glossy`).
+    pub glossiness: f32,
 }
 
 impl Default for Phong {
     /// The course's parser defaults: white diffuse, no specular, exponent 1,
-    /// not reflective, opaque, index of refraction 1.
+    /// not reflective, opaque, index of refraction 1; and no gloss.
     fn default() -> Self {
         Self {
             diffuse: Vec3::ONE,
@@ -28,6 +32,7 @@ impl Default for Phong {
             reflective: Vec3::ZERO,
             transparent: Vec3::ZERO,
             ior: 1.0,
+            glossiness: 0.0,
         }
     }
 }
@@ -44,6 +49,7 @@ impl Phong {
             reflective: l(self.reflective, b.reflective),
             transparent: l(self.transparent, b.transparent),
             ior: self.ior + (b.ior - self.ior) * s,
+            glossiness: self.glossiness + (b.glossiness - self.glossiness) * s,
         }
     }
 }

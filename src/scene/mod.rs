@@ -3,12 +3,14 @@
 //! turns a [`Scene`] into something rays can be shot at.
 
 mod camera;
+mod effects;
 mod light;
 mod material;
 mod node;
 
 pub use camera::Camera;
-pub use light::Light;
+pub use effects::{AmbientOcclusion, EffectSamples, Effects, Lens};
+pub use light::{AreaShape, Light};
 pub use material::{Material, Phong, TextureKind};
 pub use node::{Mesh, Node, Shape};
 
@@ -48,6 +50,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// The object tree (a group at the top).
     pub root: Node,
+    /// Lens, shutter, ray counts and ambient occlusion (all off by default).
+    pub effects: Effects,
 }
 
 impl Scene {
@@ -85,6 +89,7 @@ impl Scene {
                 shape: Shape::Mesh(Arc::new(mesh)),
                 material: Some(0),
             },
+            effects: Effects::default(),
         }
     }
 

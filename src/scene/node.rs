@@ -1,5 +1,5 @@
 use super::Summary;
-use crate::math::{Aabb, Mat4, Vec3};
+use crate::math::{Aabb, Mat4, Motion, Vec3};
 use std::sync::Arc;
 
 /// A triangle mesh: shared vertices, triangles by index.
@@ -46,6 +46,14 @@ pub enum Node {
         /// The transformed subtree.
         child: Box<Node>,
     },
+    /// A child moving by a keyframed transform (motion blur): at instant `t`
+    /// its object-to-parent matrix is `motion.matrix(t)`.
+    Moving {
+        /// The keyframes.
+        motion: Arc<Motion>,
+        /// The moving subtree.
+        child: Box<Node>,
+    },
     /// A shape with its (already resolved) material index; `None` when the
     /// file gave no `MaterialIndex` before it.
     Shape {
@@ -71,6 +79,9 @@ impl Node {
                 .iter()
                 .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds(m))),
             Node::Transform { matrix, child } => child.bounds(&(*m * *matrix)),
+            Node::Moving { motion, child } => {
+                motion.swept_bounds(&child.bounds(&Mat4::IDENTITY), m)
+            }
             Node::Shape { shape, .. } => match shape {
                 Shape::Sphere { center, radius } => Aabb::new(
                     *center - Vec3::splat(*radius),
@@ -94,7 +105,7 @@ impl Node {
                 s.groups += 1;
                 children.iter().for_each(|c| c.count(s));
             }
-            Node::Transform { child, .. } => {
+            Node::Transform { child, .. } | Node::Moving { child, .. } => {
                 s.transforms += 1;
                 child.count(s);
             }

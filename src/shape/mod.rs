@@ -6,11 +6,13 @@
 //! rays start outside the error box of the point they leave
 //! ([`crate::math::SurfacePoint`]), so they cannot re-hit its surface there.
 
+mod moving;
 mod plane;
 mod sphere;
 mod transformed;
 mod triangle;
 
+pub use moving::Moving;
 pub use plane::Plane;
 pub use sphere::Sphere;
 pub use transformed::Transformed;
@@ -30,6 +32,9 @@ pub enum Shape {
     /// A shape that could not be baked into world space (a sphere under
     /// non-uniform scale): rays are carried into its space instead.
     Transformed(Box<Transformed>),
+    /// A shape under a keyframed motion (motion blur): rays are carried into
+    /// its space at their own time.
+    Moving(Box<Moving>),
 }
 
 impl Shape {
@@ -41,6 +46,7 @@ impl Shape {
             Shape::Plane(p) => p.intersect(ray, tmin, tmax),
             Shape::Triangle(t) => t.intersect(ray, tmin, tmax),
             Shape::Transformed(x) => x.intersect(ray, tmin, tmax),
+            Shape::Moving(m) => m.intersect(ray, tmin, tmax),
         }
     }
 
@@ -54,6 +60,7 @@ impl Shape {
             Shape::Plane(pl) => pl.surface(ray, t),
             Shape::Triangle(tr) => tr.surface(ray, t),
             Shape::Transformed(x) => x.surface(ray, t),
+            Shape::Moving(m) => m.surface(ray, t),
         }
     }
 
@@ -64,6 +71,7 @@ impl Shape {
             Shape::Plane(p) => p.bounds(),
             Shape::Triangle(t) => t.bounds(),
             Shape::Transformed(x) => x.bounds(),
+            Shape::Moving(m) => m.bounds(),
         }
     }
 }

@@ -40,7 +40,7 @@ impl Transformed {
     }
 
     fn object_ray(&self, ray: &Ray) -> Ray {
-        Ray::new(
+        ray.child(
             self.to_object.transform_point3(ray.origin),
             self.to_object.transform_vector3(ray.dir),
         )

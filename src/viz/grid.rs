@@ -120,6 +120,7 @@ impl Voxels {
             background: scene.background.clone(),
             materials,
             root: Node::Group(faces),
+            effects: Default::default(),
         }
     }
 }

@@ -70,6 +70,7 @@ pub fn kind_style(kind: RayKind) -> (&'static str, Vec3) {
         RayKind::Shadow => ("shadow", Vec3::new(0.1, 0.9, 0.1)),
         RayKind::Reflected => ("reflected", Vec3::new(0.9, 0.1, 0.1)),
         RayKind::Transmitted => ("transmitted", Vec3::new(0.1, 0.1, 0.9)),
+        RayKind::Occlusion => ("occlusion", Vec3::new(0.9, 0.8, 0.1)),
     }
 }
 
@@ -91,12 +92,15 @@ impl RayTree {
             RayKind::Shadow,
             RayKind::Reflected,
             RayKind::Transmitted,
+            RayKind::Occlusion,
         ]
         .into_iter()
         .map(|k| {
             let n = self.rays.iter().filter(|r| r.kind == k).count();
             (kind_style(k).0, n)
         })
+        // The course has no occlusion rays: listed only when there are some.
+        .filter(|&(name, n)| n > 0 || name != "occlusion")
         .collect()
     }
 

@@ -19,8 +19,8 @@ use crate::accel::{
     Storage,
 };
 use crate::math::Vec3;
-use crate::scene::{Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
-use crate::shape::{Plane, Shape, Sphere, Transformed, Triangle};
+use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
+use crate::shape::{Moving, Plane, Shape, Sphere, Transformed, Triangle};
 use glam::{DMat4, DVec3};
 use std::time::Instant;
 
@@ -124,8 +124,15 @@ fn camera_to_render_space(c: &Camera, origin: DVec3) -> Camera {
 
 fn light_to_render_space(l: &Light, origin: DVec3) -> Light {
     let mut l = l.clone();
-    if let Light::Point { position, .. } = &mut l {
-        *position = point_to_render(*position, origin);
+    match &mut l {
+        Light::Point { position, .. } => *position = point_to_render(*position, origin),
+        Light::Area { shape, .. } => match shape {
+            AreaShape::Quad { corner, .. } => *corner = point_to_render(*corner, origin),
+            AreaShape::Disk { center, .. } | AreaShape::Sphere { center, .. } => {
+                *center = point_to_render(*center, origin)
+            }
+        },
+        Light::Directional { .. } => {}
     }
     l
 }
@@ -202,6 +209,27 @@ impl Flattener {
                     to_object: inv.as_mat4(),
                     child: Box::new(self.node(child, m, instance)),
                 }
+            }
+            Node::Moving { motion, child } => {
+                // The subtree is flattened in the motion's object space and
+                // each of its primitives wrapped: the static transforms
+                // inside are baked as usual, the motion and the static part
+                // outside are applied per ray at the ray's time.
+                let start = self.prims.len();
+                self.node(child, DMat4::IDENTITY, instance);
+                let inner: Vec<Primitive> = self.prims.drain(start..).collect();
+                let parent = m.as_mat4();
+                for p in inner {
+                    if let Some(mv) = Moving::new(p.shape, motion.clone(), parent) {
+                        self.prims.push(Primitive {
+                            shape: Shape::Moving(Box::new(mv)),
+                            ..p
+                        });
+                    }
+                }
+                // The primitives share one swept path: to `bvh-hierarchy`
+                // they are one shape, split like a mesh's triangles.
+                SceneTree::Shape(start as u32..self.prims.len() as u32)
             }
             Node::Shape { shape, material } => {
                 let start = self.prims.len() as u32;
@@ -348,6 +376,7 @@ mod tests {
             background: Background::default(),
             materials: vec![],
             root,
+            effects: Default::default(),
         }
     }
 

@@ -139,7 +139,7 @@ impl World {
     /// A world-space ray in this world's rendering space (the origin moved
     /// in f64; `t` is unchanged).
     pub fn ray_from_world(&self, ray: &Ray) -> Ray {
-        Ray::new((ray.origin.as_dvec3() - self.origin).as_vec3(), ray.dir)
+        ray.child((ray.origin.as_dvec3() - self.origin).as_vec3(), ray.dir)
     }
 
     /// A rendering-space point in world space (in f64, exactly as the

@@ -210,12 +210,46 @@ struct RenderArgs {
     /// Render only the pixels X0..X1 x Y0..Y1 (half-open; x right, y down from the top) as an EXR piece.
     #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"])]
     crop: Option<Vec<u32>>,
+    /// Render frame K of the scene's animation (moving objects and camera): time K/FPS, the shutter moved there; '#'s in output names become the frame number (shot_####.png).
+    #[arg(long, value_name = "K", conflicts_with = "frame_from_env")]
+    frame: Option<u32>,
+    /// Like --frame, with K read from an environment variable (SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, ...).
+    #[arg(long, value_name = "VAR")]
+    frame_from_env: Option<String>,
+    /// Frames per second of --frame (frame K starts at K/FPS in the scene's time unit).
+    #[arg(long, default_value_t = glint::animation::DEFAULT_FPS)]
+    fps: f64,
     /// The course's sample view: every sample as a dot in a zoomed checkerboard of pixels.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_samples: Option<Vec<String>>,
     /// The course's filter view: the filter's weights around the central pixel, zoomed.
     #[arg(long, num_args = 2, value_names = ["FILE", "ZOOM"])]
     render_filter: Option<Vec<String>>,
+    /// Shadow rays per area light per shaded point (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    shadow_samples: Option<u32>,
+    /// Rays per glossy lobe (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    glossy_samples: Option<u32>,
+    /// Shutter instants per pixel sample: camera rays = spp x time x lens (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    time_samples: Option<u32>,
+    /// Lens points per pixel sample: camera rays = spp x time x lens (overrides the scene's Samples).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    lens_samples: Option<u32>,
+    /// Ambient-occlusion rays per shaded point (overrides the scene's AmbientOcclusion).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    ao_samples: Option<u32>,
+    /// What to compute: whitted (shaded image) or ao (grey ambient-occlusion image).
+    #[arg(long, value_enum, default_value_t = IntegratorName::Whitted)]
+    integrator: IntegratorName,
+}
+
+/// Command-line names of the integrators.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum IntegratorName {
+    Whitted,
+    Ao,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -365,6 +399,14 @@ fn render(a: RenderArgs) -> ExitCode {
         });
     }
     job.samples_image = a.samples_image;
+    job.effect_samples = glint::job::SampleOverrides {
+        shadow: a.shadow_samples,
+        glossy: a.glossy_samples,
+        time: a.time_samples,
+        lens: a.lens_samples,
+        ao: a.ao_samples,
+    };
+    job.ao_image = a.integrator == IntegratorName::Ao;
     job.cost_image = a.cost_image;
     let size = (job.width, job.height);
     let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
@@ -398,6 +440,22 @@ fn render(a: RenderArgs) -> ExitCode {
                     eprintln!("glint: {what} expects a file and a zoom from 1 to 1000, got {v:?}");
                     return ExitCode::from(2);
                 }
+            }
+        }
+    }
+    let frame = match (a.frame, &a.frame_from_env) {
+        (Some(k), _) => Some(Ok(k)),
+        (_, Some(var)) => Some(glint::animation::frame_from_env(var, |v| {
+            std::env::var(v).ok()
+        })),
+        _ => None,
+    };
+    if let Some(k) = frame {
+        match k.and_then(|k| glint::animation::FrameTime::new(k, a.fps)) {
+            Ok(f) => job = job.at_frame(f),
+            Err(e) => {
+                eprintln!("glint: {e}");
+                return ExitCode::from(2);
             }
         }
     }

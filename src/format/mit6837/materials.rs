@@ -65,6 +65,7 @@ impl<'a> Parser<'a> {
             "reflectiveColor",
             "transparentColor",
             "indexOfRefraction",
+            "glossiness",
         ];
         self.fields(kw, &names, |p, f| {
             match f.text {
@@ -76,6 +77,10 @@ impl<'a> Parser<'a> {
                 "transparentColor" => m.transparent = p.vec3_within(1.0, "a transparency")?,
                 // A negative exponent makes the highlight infinite where N·H = 0.
                 "exponent" => m.exponent = p.number_where(|v| v >= 0.0, "an exponent >= 0")?,
+                "glossiness" => {
+                    m.glossiness =
+                        p.number_where(|v| (0.0..=1.0).contains(&v), "a glossiness from 0 to 1")?
+                }
                 // Refraction divides by the index.
                 _ => m.ior = p.number_where(|v| v > 0.0, "a positive index of refraction")?,
             }
@@ -204,7 +209,7 @@ impl<'a> Parser<'a> {
     }
 
     /// A number satisfying `ok`, else an error at it expecting `what`.
-    fn number_where(&mut self, ok: impl Fn(f32) -> bool, what: &str) -> Result<f32> {
+    pub(super) fn number_where(&mut self, ok: impl Fn(f32) -> bool, what: &str) -> Result<f32> {
         let (v, tok) = self.number()?;
         if ok(v) {
             Ok(v)

@@ -1,24 +1,25 @@
 //! The object tree: groups with their sticky `MaterialIndex`, transforms,
 //! spheres, planes, triangles and meshes.
 
-use super::cursor::{closing, vec_text, Parser};
+use super::cursor::{closing, plural, vec_text, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
 use crate::format::diagnostic::{io_reason, quote};
 use crate::format::obj::{self, LoadError};
-use crate::math::{Mat4, Vec3};
+use crate::math::{Keyframe, Mat4, Motion, Quat, Vec3};
 use crate::scene::{Node, Shape};
 use std::path::Path;
 use std::sync::Arc;
 
 /// The keywords that start an object.
-const OBJECTS: [&str; 6] = [
+const OBJECTS: [&str; 7] = [
     "Sphere",
     "Plane",
     "Triangle",
     "TriangleMesh",
     "Group",
     "Transform",
+    "KeyframedTransform",
 ];
 
 /// Deepest Group/Transform nesting accepted: far beyond any real scene, far
@@ -60,8 +61,8 @@ impl<'a> Parser<'a> {
                 }
                 Some(t) if is_object(t) => children.push(self.object(t, current)?),
                 _ => {
-                    let expected =
-                        "an object (Sphere, Plane, Triangle, TriangleMesh, Group, Transform)";
+                    let expected = "an object (Sphere, Plane, Triangle, TriangleMesh, Group, \
+                                    Transform, KeyframedTransform)";
                     return Err(self.error(
                         t,
                         format!("{expected}, 'MaterialIndex', or {}", closing(kw)),
@@ -74,7 +75,7 @@ impl<'a> Parser<'a> {
     /// Any object; `kw` is its keyword (checked by the caller).
     fn object(&mut self, kw: Token<'a>, material: Current) -> Result<Node> {
         let shape = match kw.text {
-            "Group" | "Transform" => {
+            "Group" | "Transform" | "KeyframedTransform" => {
                 if self.depth == MAX_DEPTH {
                     let expected = format!("at most {MAX_DEPTH} nested Groups and Transforms");
                     return Err(self.error(Some(kw), expected));
@@ -82,7 +83,8 @@ impl<'a> Parser<'a> {
                 self.depth += 1;
                 let node = match kw.text {
                     "Group" => self.group(kw, material),
-                    _ => self.transform(kw, material),
+                    "Transform" => self.transform(kw, material),
+                    _ => self.keyframed(kw, material),
                 };
                 self.depth -= 1;
                 return node;
@@ -135,6 +137,107 @@ impl<'a> Parser<'a> {
             matrix,
             child: Box::new(child),
         })
+    }
+
+    /// `KeyframedTransform { numKeyframes n Keyframe{..}* object }`: the
+    /// object moves through the keyframes' poses (motion blur). Keyframe
+    /// times must strictly increase.
+    fn keyframed(&mut self, kw: Token<'a>, material: Current) -> Result<Node> {
+        self.open(kw)?;
+        match self.next() {
+            Some(t) if t.is("numKeyframes") => {}
+            other => return Err(self.error(other, "'numKeyframes'")),
+        }
+        let (n, n_tok) = self.non_negative("a count after 'numKeyframes'")?;
+        if n == 0 {
+            return Err(self.error(Some(n_tok), "at least 1 keyframe"));
+        }
+        let mut keys: Vec<Keyframe> = Vec::new();
+        let child = loop {
+            let t = self.next();
+            match t {
+                Some(t) if t.is("Keyframe") => {
+                    if keys.len() == n {
+                        return Err(self.too_many(t, n, "keyframe", "numKeyframes"));
+                    }
+                    let (key, time_tok) = self.keyframe(t)?;
+                    if let Some(prev) = keys.last() {
+                        if key.time <= prev.time {
+                            let expected =
+                                format!("a keyframe time after the previous one ({})", prev.time);
+                            return Err(self.error(Some(time_tok), expected));
+                        }
+                    }
+                    keys.push(key);
+                }
+                Some(t) if is_object(t) && keys.len() == n => break self.object(t, material)?,
+                Some(t) if is_object(t) || t.kind == Kind::Close => {
+                    let found =
+                        format!("{} after {}", quote(t.text), plural(keys.len(), "keyframe"));
+                    let expected = format!("{} (numKeyframes {n})", plural(n, "keyframe"));
+                    return Err(self.error_found(Some(t), expected, found));
+                }
+                _ if keys.len() == n => {
+                    return Err(self.error(
+                        t,
+                        "the object to move (a KeyframedTransform holds one object)",
+                    ))
+                }
+                _ => return Err(self.error(t, "'Keyframe'")),
+            }
+        };
+        match self.next() {
+            Some(t) if t.kind == Kind::Close => {}
+            other => {
+                let expected = format!("{} (a KeyframedTransform holds one object)", closing(kw));
+                return Err(self.error(other, expected));
+            }
+        }
+        let motion = Motion::new(keys).expect("checked: at least one key, increasing times");
+        Ok(Node::Moving {
+            motion: Arc::new(motion),
+            child: Box::new(child),
+        })
+    }
+
+    /// `Keyframe { time t [translate V] [rotate axis degrees] [scale V] }`;
+    /// returns the keyframe and its time token (for ordering errors).
+    pub(super) fn keyframe(&mut self, kw: Token<'a>) -> Result<(Keyframe, Token<'a>)> {
+        let mut time = None;
+        let mut key = Keyframe::identity(0.0);
+        let close = self.fields(kw, &["time", "translate", "rotate", "scale"], |p, f| {
+            match f.text {
+                "time" => time = Some(p.number()?),
+                "translate" => key.translation = p.vec3()?.0,
+                "rotate" => {
+                    let (axis, toks) = p.vec3()?;
+                    let degrees = p.number()?.0;
+                    let axis = axis.as_dvec3();
+                    if axis.length_squared() == 0.0 {
+                        return Err(p.error_found(
+                            Some(toks[0]),
+                            "a non-zero rotation axis",
+                            vec_text(&toks),
+                        ));
+                    }
+                    key.rotation =
+                        Quat::from_axis_angle(axis.normalize().as_vec3(), degrees.to_radians());
+                }
+                _ => {
+                    let (v, toks) = p.vec3()?;
+                    // A zero scale squashes the object flat and makes the
+                    // inverse pose infinite.
+                    if let Some(i) = (0..3).find(|&i| v[i] == 0.0) {
+                        return Err(p.error(Some(toks[i]), "a non-zero scale"));
+                    }
+                    key.scale = v;
+                }
+            }
+            Ok(())
+        })?;
+        let (t, tok) = self.require(time, close, "time", kw)?;
+        key.time = t;
+        Ok((key, tok))
     }
 
     /// `Sphere { center V radius r }`, `r > 0`.

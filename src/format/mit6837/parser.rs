@@ -4,9 +4,12 @@ use super::cursor::{closing, ordinal, plural, vec_text, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
 use crate::format::diagnostic::quote;
-use crate::math::Vec3;
-use crate::scene::{Background, Camera, Light, Scene};
+use crate::math::{Keyframe, Motion, Vec3};
+use crate::scene::{
+    AmbientOcclusion, AreaShape, Background, Camera, EffectSamples, Effects, Lens, Light, Scene,
+};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Parses a whole scene; `file` is used in messages and to resolve meshes.
 pub(crate) fn parse(src: &str, file: &Path) -> Result<Scene> {
@@ -21,6 +24,8 @@ pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<Pa
     let mut background = None;
     let mut materials = None;
     let mut root = None;
+    let mut effects = Effects::default();
+    let (mut samples_seen, mut ao_seen) = (false, false);
     while let Some(t) = p.next() {
         match (t.kind, t.text) {
             (Kind::Word, "OrthographicCamera" | "PerspectiveCamera") => {
@@ -28,7 +33,20 @@ pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<Pa
                     let found = format!("a second camera {}", quote(t.text));
                     return Err(p.error_found(Some(t), "one camera", found));
                 }
-                camera = Some(p.camera(t)?);
+                let (cam, lens, motion) = p.camera(t)?;
+                camera = Some(cam);
+                effects.lens = lens;
+                effects.camera_motion = motion.map(Arc::new);
+            }
+            (Kind::Word, "Samples") => {
+                p.once(samples_seen, t)?;
+                samples_seen = true;
+                p.samples(t, &mut effects.samples)?;
+            }
+            (Kind::Word, "AmbientOcclusion") => {
+                p.once(ao_seen, t)?;
+                ao_seen = true;
+                effects.ambient_occlusion = Some(p.ambient_occlusion(t, &mut effects.samples)?);
             }
             (Kind::Word, "Lights") => {
                 p.once(lights.is_some(), t)?;
@@ -49,7 +67,7 @@ pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<Pa
             }
             _ => {
                 let expected = "a block (OrthographicCamera, PerspectiveCamera, Lights, \
-                                Background, Materials, Group)";
+                                Background, Materials, Group, Samples, AmbientOcclusion)";
                 return Err(p.error(Some(t), expected));
             }
         }
@@ -76,9 +94,14 @@ pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<Pa
         background,
         materials: materials.unwrap_or_default(),
         root,
+        effects,
     };
     Ok((scene, meshes))
 }
+
+/// Largest ray count a scene may ask for per effect: far more than any
+/// clean image needs, small enough that products of counts stay in range.
+pub const MAX_EFFECT_SAMPLES: u32 = 4096;
 
 impl<'a> Parser<'a> {
     /// Rejects a second block of a kind that may appear only once.
@@ -90,17 +113,57 @@ impl<'a> Parser<'a> {
         Err(self.error_found(Some(t), expected, format!("a second {}", quote(t.text))))
     }
 
-    /// `OrthographicCamera {center direction up size}` or
-    /// `PerspectiveCamera {center direction up angle}`, fields in any order.
-    fn camera(&mut self, kw: Token<'a>) -> Result<Camera> {
+    /// `OrthographicCamera {center direction up size [shutter] [keyframes]}`
+    /// or `PerspectiveCamera {center direction up angle [aperture
+    /// focusDistance] [shutter] [keyframes]}`, fields in any order, where
+    /// keyframes are `numKeyframes n Keyframe{..}*` (the camera rig's motion).
+    /// Returns the camera, its lens and its motion.
+    fn camera(&mut self, kw: Token<'a>) -> Result<(Camera, Lens, Option<Motion>)> {
         let ortho = kw.text == "OrthographicCamera";
         let last = if ortho { "size" } else { "angle" };
         let (mut center, mut direction, mut up, mut extent) = (None, None, None, None);
-        let close = self.fields(kw, &["center", "direction", "up", last], |p, f| {
+        let (mut aperture, mut focus, mut shutter, mut motion) = (None, None, None, None);
+        let names: &[&str] = if ortho {
+            &[
+                "center",
+                "direction",
+                "up",
+                "size",
+                "shutter",
+                "numKeyframes",
+            ]
+        } else {
+            &[
+                "center",
+                "direction",
+                "up",
+                "angle",
+                "aperture",
+                "focusDistance",
+                "shutter",
+                "numKeyframes",
+            ]
+        };
+        let close = self.fields(kw, names, |p, f| {
             match f.text {
                 "center" => center = Some(p.vec3()?.0),
                 "direction" => direction = Some(p.vec3()?),
                 "up" => up = Some(p.vec3()?),
+                "aperture" => {
+                    aperture = Some(p.number_where(|v| v >= 0.0, "an aperture radius >= 0")?)
+                }
+                "focusDistance" => {
+                    focus = Some(p.number_where(|v| v > 0.0, "a positive focus distance")?)
+                }
+                "shutter" => {
+                    let open = p.number()?.0;
+                    let close = p.number_where(
+                        |v| v >= open,
+                        "a shutter close time not before the open time",
+                    )?;
+                    shutter = Some([open, close]);
+                }
+                "numKeyframes" => motion = Some(p.keyframe_list()?),
                 _ => extent = Some(p.number()?),
             }
             Ok(())
@@ -109,6 +172,16 @@ impl<'a> Parser<'a> {
         let (direction, dir_toks) = self.require(direction, close, "direction", kw)?;
         let (up, up_toks) = self.require(up, close, "up", kw)?;
         let (extent, extent_tok) = self.require(extent, close, last, kw)?;
+        let mut lens = Lens {
+            shutter: shutter.unwrap_or([0.0, 0.0]),
+            ..Lens::default()
+        };
+        if let Some(a) = aperture.filter(|&a| a > 0.0) {
+            // A lens without a focus distance has no sharp plane to aim at.
+            lens.aperture = a;
+            lens.focus_distance =
+                self.require(focus, close, "focusDistance (with an aperture)", kw)?;
+        }
         let d = direction.as_dvec3();
         let u = up.as_dvec3();
         if d.length_squared() == 0.0 {
@@ -134,12 +207,13 @@ impl<'a> Parser<'a> {
             if extent <= 0.0 {
                 return Err(self.error(Some(extent_tok), "a positive size"));
             }
-            return Ok(Camera::Orthographic {
+            let cam = Camera::Orthographic {
                 center,
                 direction,
                 up,
                 size: extent,
-            });
+            };
+            return Ok((cam, lens, motion));
         }
         if !(extent > 0.0 && extent < 180.0) {
             return Err(self.error(
@@ -147,12 +221,45 @@ impl<'a> Parser<'a> {
                 "an angle between 0 and 180 degrees (exclusive)",
             ));
         }
-        Ok(Camera::Perspective {
+        let cam = Camera::Perspective {
             center,
             direction,
             up,
             angle_deg: extent,
-        })
+        };
+        Ok((cam, lens, motion))
+    }
+
+    /// After `numKeyframes`: the count and that many `Keyframe` blocks, times
+    /// strictly increasing.
+    fn keyframe_list(&mut self) -> Result<Motion> {
+        let (n, n_tok) = self.non_negative("a count after 'numKeyframes'")?;
+        if n == 0 {
+            return Err(self.error(Some(n_tok), "at least 1 keyframe"));
+        }
+        let mut keys: Vec<Keyframe> = Vec::new();
+        while keys.len() < n {
+            match self.next() {
+                Some(t) if t.is("Keyframe") => {
+                    let (key, time_tok) = self.keyframe(t)?;
+                    if let Some(prev) = keys.last() {
+                        if key.time <= prev.time {
+                            let expected =
+                                format!("a keyframe time after the previous one ({})", prev.time);
+                            return Err(self.error(Some(time_tok), expected));
+                        }
+                    }
+                    keys.push(key);
+                }
+                other => {
+                    let expected = format!("{} (numKeyframes {n})", plural(n, "keyframe"));
+                    let what = other.map_or("the end of the file".to_string(), |t| quote(t.text));
+                    let found = format!("{what} after {}", plural(keys.len(), "keyframe"));
+                    return Err(self.error_found(other, expected, found));
+                }
+            }
+        }
+        Ok(Motion::new(keys).expect("checked: at least one key, increasing times"))
     }
 
     /// `Lights { numLights n (DirectionalLight{..} | PointLight{..})* }`.
@@ -169,17 +276,23 @@ impl<'a> Parser<'a> {
                         false => Ok(lights),
                     };
                 }
-                Some(t) if t.is("DirectionalLight") || t.is("PointLight") => {
+                Some(t) if t.is("DirectionalLight") || t.is("PointLight") || t.is("AreaLight") => {
                     if lights.len() == n {
                         return Err(self.too_many(t, n, "light", "numLights"));
                     }
-                    lights.push(self.light(t)?);
+                    lights.push(match t.text {
+                        "AreaLight" => self.area_light(t)?,
+                        _ => self.light(t)?,
+                    });
                 }
                 _ if lights.len() == n => return Err(self.error(t, closing(kw))),
                 _ => {
                     return Err(self.error(
                         t,
-                        format!("'DirectionalLight', 'PointLight', or {}", closing(kw)),
+                        format!(
+                            "'DirectionalLight', 'PointLight', 'AreaLight', or {}",
+                            closing(kw)
+                        ),
                     ))
                 }
             }
@@ -226,6 +339,143 @@ impl<'a> Parser<'a> {
                 attenuation: attenuation.unwrap_or(Vec3::X),
             },
         })
+    }
+
+    /// `AreaLight { (quad {corner V edge1 V edge2 V} | disk {center V normal V
+    /// radius r} | sphere {center V radius r}) color V power p }`.
+    fn area_light(&mut self, kw: Token<'a>) -> Result<Light> {
+        let (mut shape, mut color, mut power) = (None, None, None);
+        let close = self.fields(kw, &["quad", "disk", "sphere", "color", "power"], |p, f| {
+            match f.text {
+                "color" => color = Some(p.vec3()?.0),
+                "power" => power = Some(p.number_where(|v| v >= 0.0, "a power >= 0")?),
+                _ => {
+                    if shape.is_some() {
+                        let found = format!("a second shape {}", quote(f.text));
+                        return Err(p.error_found(Some(f), "one shape per AreaLight", found));
+                    }
+                    shape = Some(p.area_shape(f)?);
+                }
+            }
+            Ok(())
+        })?;
+        let shape = self.require(shape, close, "a shape (quad, disk or sphere)", kw)?;
+        let color = self.require(color, close, "color", kw)?;
+        let power = self.require(power, close, "power", kw)?;
+        Ok(Light::Area {
+            shape,
+            color,
+            power,
+        })
+    }
+
+    /// The shape block of an AreaLight; `kw` is `quad`, `disk` or `sphere`.
+    fn area_shape(&mut self, kw: Token<'a>) -> Result<AreaShape> {
+        let names: &[&str] = match kw.text {
+            "quad" => &["corner", "edge1", "edge2"],
+            "disk" => &["center", "normal", "radius"],
+            _ => &["center", "radius"],
+        };
+        let mut v: [Option<(Vec3, [Token<'a>; 3])>; 3] = [None; 3];
+        let mut radius = None;
+        let close = self.fields(kw, names, |p, f| {
+            match f.text {
+                "radius" => radius = Some(p.number_where(|r| r > 0.0, "a positive radius")?),
+                name => {
+                    let i = names.iter().position(|n| *n == name).unwrap_or(0);
+                    v[i] = Some(p.vec3()?);
+                }
+            }
+            Ok(())
+        })?;
+        match kw.text {
+            "quad" => {
+                let corner = self.require(v[0], close, "corner", kw)?.0;
+                let (edge1, _) = self.require(v[1], close, "edge1", kw)?;
+                let (edge2, toks) = self.require(v[2], close, "edge2", kw)?;
+                if edge1.as_dvec3().cross(edge2.as_dvec3()).length_squared() == 0.0 {
+                    return Err(self.error_found(
+                        Some(toks[0]),
+                        "an edge2 not parallel to edge1 (a quad with an area)",
+                        vec_text(&toks),
+                    ));
+                }
+                Ok(AreaShape::Quad {
+                    corner,
+                    edge1,
+                    edge2,
+                })
+            }
+            "disk" => {
+                let center = self.require(v[0], close, "center", kw)?.0;
+                let (normal, toks) = self.require(v[1], close, "normal", kw)?;
+                let radius = self.require(radius, close, "radius", kw)?;
+                if normal.as_dvec3().length_squared() == 0.0 {
+                    return Err(self.error_found(
+                        Some(toks[0]),
+                        "a non-zero disk normal",
+                        vec_text(&toks),
+                    ));
+                }
+                Ok(AreaShape::Disk {
+                    center,
+                    normal,
+                    radius,
+                })
+            }
+            _ => {
+                let center = self.require(v[0], close, "center", kw)?.0;
+                let radius = self.require(radius, close, "radius", kw)?;
+                Ok(AreaShape::Sphere { center, radius })
+            }
+        }
+    }
+
+    /// `Samples { [shadow n] [glossy n] [time n] [lens n] }`: rays per effect.
+    fn samples(&mut self, kw: Token<'a>, out: &mut EffectSamples) -> Result<()> {
+        self.fields(kw, &["shadow", "glossy", "time", "lens"], |p, f| {
+            let n = p.sample_count()?;
+            match f.text {
+                "shadow" => out.shadow = n,
+                "glossy" => out.glossy = n,
+                "time" => out.time = n,
+                _ => out.lens = n,
+            }
+            Ok(())
+        })?;
+        Ok(())
+    }
+
+    /// `AmbientOcclusion { [samples n] [distance d] }`: turns on the ambient
+    /// occlusion factor of the ambient term.
+    fn ambient_occlusion(
+        &mut self,
+        kw: Token<'a>,
+        samples: &mut EffectSamples,
+    ) -> Result<AmbientOcclusion> {
+        let mut ao = AmbientOcclusion {
+            distance: f32::INFINITY,
+        };
+        self.fields(kw, &["samples", "distance"], |p, f| {
+            match f.text {
+                "samples" => samples.ao = p.sample_count()?,
+                _ => ao.distance = p.number_where(|v| v > 0.0, "a positive distance")?,
+            }
+            Ok(())
+        })?;
+        Ok(ao)
+    }
+
+    /// A ray count: an integer from 1 to [`MAX_EFFECT_SAMPLES`].
+    fn sample_count(&mut self) -> Result<u32> {
+        let (v, tok) = self.integer()?;
+        match u32::try_from(v) {
+            Ok(n) if (1..=MAX_EFFECT_SAMPLES).contains(&n) => Ok(n),
+            _ => Err(self.error(
+                Some(tok),
+                format!("a sample count from 1 to {MAX_EFFECT_SAMPLES}"),
+            )),
+        }
     }
 
     /// `Background { [color V] [ambientLight V] }`, defaults from [`Background::default`].

@@ -21,7 +21,7 @@ fn error(src: &str) -> ParseError {
 fn leaves(n: &Node, out: &mut Vec<(Shape, Option<usize>)>) {
     match n {
         Node::Group(c) => c.iter().for_each(|c| leaves(c, out)),
-        Node::Transform { child, .. } => leaves(child, out),
+        Node::Transform { child, .. } | Node::Moving { child, .. } => leaves(child, out),
         Node::Shape { shape, material } => out.push((shape.clone(), *material)),
     }
 }
@@ -109,6 +109,7 @@ fn materials_defaults_and_fields() {
         reflective: Vec3::splat(0.1),
         transparent: Vec3::splat(0.5),
         ior: 1.5,
+        glossiness: 0.0,
     };
     assert_eq!(s.materials[2], Material::Phong(want));
 }
@@ -468,6 +469,61 @@ fn meshes_used_twice_are_loaded_once() {
         .collect();
     assert_eq!(meshes.len(), 4);
     assert!(meshes.iter().all(|m| std::sync::Arc::ptr_eq(m, &meshes[0])));
+}
+
+#[test]
+fn distribution_blocks() {
+    let s = scene(
+        "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30\n\
+         aperture 0.2 focusDistance 8 shutter 0 0.5 }\n\
+         Lights { numLights 3\n\
+           AreaLight { quad { corner 0 4 0 edge1 1 0 0 edge2 0 0 1 } color 1 1 1 power 50 }\n\
+           AreaLight { disk { center 0 4 0 normal 0 -1 0 radius 0.5 } color 1 0 0 power 5 }\n\
+           AreaLight { power 2 sphere { radius 0.25 center 1 2 3 } color 0 1 0 } }\n\
+         Samples { shadow 16 glossy 8 time 4 lens 2 }\n\
+         AmbientOcclusion { samples 32 distance 2.5 }\n\
+         Materials { numMaterials 1 PhongMaterial { reflectiveColor 1 1 1 glossiness 0.25 } }\n\
+         Group { numObjects 1 KeyframedTransform { numKeyframes 2\n\
+           Keyframe { time 0 }\n\
+           Keyframe { time 1 translate 1 0 0 rotate 0 1 0 90 scale 2 2 2 }\n\
+           Sphere { center 0 0 0 radius 1 } } }",
+    );
+    let e = &s.effects;
+    assert_eq!(e.lens.aperture, 0.2);
+    assert_eq!(e.lens.focus_distance, 8.0);
+    assert_eq!(e.lens.shutter, [0.0, 0.5]);
+    assert_eq!(
+        (
+            e.samples.shadow,
+            e.samples.glossy,
+            e.samples.time,
+            e.samples.lens,
+            e.samples.ao
+        ),
+        (16, 8, 4, 2, 32)
+    );
+    assert_eq!(e.ambient_occlusion.map(|a| a.distance), Some(2.5));
+    assert_eq!(s.lights.len(), 3);
+    assert!(matches!(
+        s.lights[2],
+        Light::Area { shape: crate::scene::AreaShape::Sphere { radius, .. }, power, .. }
+            if radius == 0.25 && power == 2.0
+    ));
+    let Material::Phong(m) = &s.materials[0] else {
+        panic!("phong expected")
+    };
+    assert_eq!(m.glossiness, 0.25);
+    let Node::Group(kids) = &s.root else {
+        panic!("group expected")
+    };
+    let Node::Moving { motion, .. } = &kids[0] else {
+        panic!("moving node expected, got {:?}", kids[0])
+    };
+    let p = motion.matrix(1.0).transform_point3(Vec3::X);
+    assert!((p - Vec3::new(1.0, 0.0, -2.0)).length() < 1e-5, "{p}");
+    // Without the new blocks nothing changes.
+    let plain = scene(&format!("{CAMERA}Group {{ numObjects 0 }}"));
+    assert_eq!(plain.effects, crate::scene::Effects::default());
 }
 
 /// Issue 15: `octaves 2000000000` hung a tiny render; now every count has a

@@ -11,8 +11,10 @@
 
 mod hash;
 mod sobol;
+mod split;
 
 pub use hash::{hash, mix64, permute, unit_f32};
+pub use split::Split2d;
 
 use crate::math::Vec2;
 use std::fmt;

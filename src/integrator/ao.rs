@@ -1,0 +1,149 @@
+//! Ambient occlusion: the cosine-weighted fraction of the hemisphere above a
+//! point that is open up to a distance. Used alone (the grey AO image of
+//! [`AmbientOcclusion`]) and by [`super::Whitted`] as a factor on the Phong
+//! ambient term.
+
+use super::{Integrator, RayKind, RayObserver};
+use crate::light::area::concentric_disk;
+use crate::math::{Ray, SurfacePoint, Vec2, Vec3};
+use crate::sampler::SampleStream;
+use crate::stats::Counters;
+use crate::world::{Hit, World};
+
+/// How ambient occlusion is estimated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AoSettings {
+    /// Hemisphere rays per shaded point (at least 1).
+    pub samples: u32,
+    /// Occluders farther than this do not count (must be positive; may be
+    /// infinite).
+    pub distance: f32,
+}
+
+impl Default for AoSettings {
+    fn default() -> Self {
+        Self {
+            samples: 16,
+            distance: f32::INFINITY,
+        }
+    }
+}
+
+/// A direction of the hemisphere around unit `n` with density `cos θ / π`
+/// (Malley: a point of the unit disk lifted onto the hemisphere).
+pub fn cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
+    let d = concentric_disk(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    let (t1, t2) = n.any_orthonormal_pair();
+    (t1 * d.x + t2 * d.y + n * z).normalize_or(n)
+}
+
+/// Fraction of `ao.samples` cosine-weighted rays from the surface point
+/// `from` (unit normal `n` facing the side to test), spawned clear of its
+/// error bound at instant `time`, that meet nothing within `ao.distance`: the
+/// estimate of `(1/π) ∫ V(ω) cos θ dω`, which is 1 on an open plane.
+#[allow(clippy::too_many_arguments)]
+pub fn unoccluded(
+    world: &World,
+    from: &SurfacePoint,
+    n: Vec3,
+    time: f32,
+    ao: &AoSettings,
+    depth: u32,
+    stream: &mut SampleStream,
+    c: &mut Counters,
+    obs: &mut impl RayObserver,
+) -> f32 {
+    let k = ao.samples.max(1);
+    let mut open = 0u32;
+    for u in stream.split_2d(k) {
+        let w = cosine_hemisphere(n, u);
+        let ray = from.spawn_ray(w).at_time(time);
+        c.occlusion += 1;
+        let blocked = world.occluded(&ray, 0.0, ao.distance, c);
+        obs.ray(
+            RayKind::Occlusion,
+            &ray,
+            if blocked { f32::NAN } else { ao.distance },
+            depth,
+            0.0,
+            None,
+        );
+        open += u32::from(!blocked);
+    }
+    open as f32 / k as f32
+}
+
+/// The ambient-occlusion integrator: each camera ray's hit is shaded grey by
+/// its unoccluded fraction (misses are white: the open sky).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AmbientOcclusion {
+    /// Rays and distance.
+    pub settings: AoSettings,
+}
+
+impl Integrator for AmbientOcclusion {
+    fn li(
+        &self,
+        world: &World,
+        ray: &Ray,
+        tmin: f32,
+        stream: &mut SampleStream,
+        counters: &mut Counters,
+        observer: &mut impl RayObserver,
+    ) -> (Vec3, Option<Hit>) {
+        counters.primary += 1;
+        let hit = world.intersect(ray, tmin, f32::INFINITY, counters);
+        observer.ray(
+            RayKind::Primary,
+            ray,
+            hit.map_or(f32::INFINITY, |h| h.t),
+            0,
+            1.0,
+            hit.map(|h| h.normal),
+        );
+        let Some(h) = hit else {
+            return (Vec3::ONE, None);
+        };
+        // Both sides of a surface are tested: the one the ray sees.
+        let n = if h.normal.dot(ray.dir) > 0.0 {
+            -h.normal
+        } else {
+            h.normal
+        };
+        let f = unoccluded(
+            world,
+            &h.surface_point(),
+            n,
+            ray.time,
+            &self.settings,
+            0,
+            stream,
+            counters,
+            observer,
+        );
+        (Vec3::splat(f), Some(h))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cosine_directions_have_the_right_mean() {
+        // E[cos θ] = 2/3 under the cos θ / π density.
+        let k = 64;
+        let mut sum = 0.0;
+        for i in 0..k {
+            for j in 0..k {
+                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                let w = cosine_hemisphere(Vec3::Y, u);
+                assert!(w.y >= 0.0);
+                sum += w.y;
+            }
+        }
+        let mean = sum / (k * k) as f32;
+        assert!((mean - 2.0 / 3.0).abs() < 3e-3, "{mean}");
+    }
+}

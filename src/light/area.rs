@@ -1,0 +1,215 @@
+//! Area lights: a point of the light's surface chosen by a 2-D sample, and
+//! the light it sends to a surface point, divided by the probability
+//! density of choosing it, so that the mean over samples is the light's
+//! whole contribution.
+
+use super::Incident;
+use crate::math::{gamma, SurfacePoint, Vec2, Vec3};
+use crate::scene::AreaShape;
+use std::f32::consts::{PI, TAU};
+
+/// Surface area of the emitting side(s): flat lights emit from both faces.
+pub fn emitting_area(shape: &AreaShape) -> f32 {
+    match *shape {
+        AreaShape::Quad { edge1, edge2, .. } => 2.0 * edge1.cross(edge2).length(),
+        AreaShape::Disk { radius, .. } => 2.0 * PI * radius * radius,
+        AreaShape::Sphere { radius, .. } => 4.0 * PI * radius * radius,
+    }
+}
+
+/// Radiance of a light of `power` (flux) and `color` over `shape`.
+pub fn radiance(shape: &AreaShape, color: Vec3, power: f32) -> Vec3 {
+    let a = emitting_area(shape);
+    if a > 0.0 {
+        color * (power / (PI * a))
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// Shadow rays stop this fraction short of the light's surface, so geometry
+/// lying in the light's plane (a ceiling around a ceiling light) does not
+/// shadow it.
+const SHORT: f32 = 1.0 - 1e-4;
+
+/// Light arriving at `p` from the point of `shape` chosen by `u ∈ [0,1)²`,
+/// already divided by the sample's density (`radiance · cos θ_light · A / d²`
+/// for area sampling, `radiance · Ω` for cone sampling).
+pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
+    match *shape {
+        AreaShape::Quad {
+            corner,
+            edge1,
+            edge2,
+        } => {
+            let n = edge1.cross(edge2);
+            let area = n.length();
+            let (a, b) = (u.x * edge1, u.y * edge2);
+            let y = corner + a + b;
+            // Two products and two sums per coordinate.
+            let error = gamma(4) * (corner.abs() + a.abs() + b.abs());
+            let n = n / area.max(f32::MIN_POSITIVE);
+            from_area_point(p, SurfacePoint { p: y, error, n }, area, radiance)
+        }
+        AreaShape::Disk {
+            center,
+            normal,
+            radius,
+        } => {
+            let n = normal.normalize_or_zero();
+            let (t1, t2) = n.any_orthonormal_pair();
+            let d = concentric_disk(u) * radius;
+            let (a, b) = (d.x * t1, d.y * t2);
+            let y = center + a + b;
+            // Off the disk's plane only by the rounding of the in-plane
+            // offsets (`t1`, `t2` are unit within a few ulps) and the sums.
+            let error = gamma(6) * (center.abs() + a.abs() + b.abs());
+            from_area_point(
+                p,
+                SurfacePoint { p: y, error, n },
+                PI * radius * radius,
+                radiance,
+            )
+        }
+        AreaShape::Sphere { center, radius } => sample_sphere(center, radius, radiance, p, u),
+    }
+}
+
+fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Incident {
+    let (y, n) = (at.p, at.n);
+    let d = y - p;
+    let dist2 = d.length_squared();
+    if dist2 == 0.0 || !dist2.is_finite() {
+        return Incident::NONE;
+    }
+    let dist = dist2.sqrt();
+    let w = d / dist;
+    // Both faces emit.
+    let cos_l = n.dot(w).abs();
+    Incident {
+        to_light: w,
+        color: radiance * (cos_l * area / dist2),
+        distance: dist * SHORT,
+        at: Some(at),
+    }
+}
+
+/// Uniform over the cone of directions the sphere subtends: every sample
+/// hits the visible cap, and the density `1 / Ω` is the same for all.
+fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
+    let to_c = c - p;
+    let d2 = to_c.length_squared();
+    if d2 <= r * r {
+        return Incident::NONE; // inside the light: it lights nothing here
+    }
+    let d = d2.sqrt();
+    let axis = to_c / d;
+    let cos_max = (1.0 - r * r / d2).max(0.0).sqrt();
+    let cos_t = 1.0 - u.x * (1.0 - cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = TAU * u.y;
+    let (t1, t2) = axis.any_orthonormal_pair();
+    let w = (t1 * phi.cos() + t2 * phi.sin()) * sin_t + axis * cos_t;
+    // Nearest intersection with the sphere along w (it exists up to rounding).
+    let b = w.dot(to_c);
+    let disc = (r * r - (d2 - b * b)).max(0.0);
+    let t = b - disc.sqrt();
+    let solid_angle = TAU * (1.0 - cos_max);
+    // The point re-projected onto the sphere, with pbrt's bound for a point
+    // so computed.
+    let y = p + w * t;
+    let n = (y - c).normalize_or_zero();
+    let y = c + r * n;
+    let error = gamma(5) * y.abs();
+    Incident {
+        to_light: w,
+        color: radiance * solid_angle,
+        distance: t * SHORT,
+        at: Some(SurfacePoint { p: y, error, n }),
+    }
+}
+
+/// Shirley and Chiu's concentric map from the square to the unit disk: it
+/// keeps strata compact (a polar map squeezes them near the centre).
+pub fn concentric_disk(u: Vec2) -> Vec2 {
+    let a = 2.0 * u - Vec2::ONE;
+    if a == Vec2::ZERO {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if a.x.abs() > a.y.abs() {
+        (a.x, PI / 4.0 * (a.y / a.x))
+    } else {
+        (a.y, PI / 2.0 - PI / 4.0 * (a.x / a.y))
+    };
+    Vec2::new(theta.cos(), theta.sin()) * r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Mean of the estimator over a fine grid of samples.
+    fn irradiance(shape: &AreaShape, p: Vec3, n: Vec3) -> f32 {
+        let k = 200;
+        let mut sum = 0.0;
+        for i in 0..k {
+            for j in 0..k {
+                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                let inc = sample(shape, Vec3::ONE, p, u);
+                sum += inc.color.x * n.dot(inc.to_light).max(0.0);
+            }
+        }
+        sum / (k * k) as f32
+    }
+
+    #[test]
+    fn small_lights_act_like_their_solid_angle() {
+        // Irradiance from a small source of unit radiance facing the point:
+        // about its solid angle.
+        let p = Vec3::ZERO;
+        let d = 10.0;
+        let quad = AreaShape::Quad {
+            corner: Vec3::new(-0.1, d, -0.1),
+            edge1: Vec3::new(0.2, 0.0, 0.0),
+            edge2: Vec3::new(0.0, 0.0, 0.2),
+        };
+        let e = irradiance(&quad, p, Vec3::Y);
+        assert!((e - 0.04 / (d * d)).abs() < 1e-3 * e, "{e}");
+        let disk = AreaShape::Disk {
+            center: Vec3::new(0.0, d, 0.0),
+            normal: Vec3::NEG_Y,
+            radius: 0.1,
+        };
+        let e = irradiance(&disk, p, Vec3::Y);
+        assert!((e - PI * 0.01 / (d * d)).abs() < 1e-3 * e, "{e}");
+        let sphere = AreaShape::Sphere {
+            center: Vec3::new(0.0, d, 0.0),
+            radius: 1.0,
+        };
+        // Exact: π sin²θ_max for a sphere straight above.
+        let e = irradiance(&sphere, p, Vec3::Y);
+        let want = PI / (d * d);
+        assert!((e - want).abs() < 1e-3 * want, "{e} vs {want}");
+    }
+
+    #[test]
+    fn radiance_spreads_power_over_the_area() {
+        let s = AreaShape::Sphere {
+            center: Vec3::ZERO,
+            radius: 2.0,
+        };
+        let l = radiance(&s, Vec3::ONE, 100.0);
+        assert!((l.x - 100.0 / (PI * 16.0 * PI)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn concentric_map_stays_in_the_disk() {
+        for i in 0..=10 {
+            for j in 0..=10 {
+                let d = concentric_disk(Vec2::new(i as f32 / 10.0, j as f32 / 10.0));
+                assert!(d.length() <= 1.0 + 1e-6);
+            }
+        }
+        assert!((concentric_disk(Vec2::new(1.0, 0.5)) - Vec2::X).length() < 1e-6);
+    }
+}

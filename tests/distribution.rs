@@ -1,0 +1,871 @@
+//! Distribution ray tracing against closed forms, and its noise as samples
+//! grow.
+//!
+//! - Soft shadows: the unoccluded fraction of a rectangle light past an
+//!   occluder's edge, and the irradiance of its visible part (Lambert's
+//!   polygon formula), within 2%.
+//! - Ambient occlusion: 1 on an open plane; beside a wall, the cosine-weighted
+//!   open fraction `1 − (acos a − a√(1−a²))/π`, `a = d / max distance`,
+//!   within 2%.
+//! - Depth of field: a point on the focus plane images within a pixel; off
+//!   the plane it spreads over a disk whose radius grows with the aperture
+//!   as the thin-lens formula says.
+//! - Motion blur: a moving sphere images as the mean of static renders at
+//!   instants spread over the shutter, within noise.
+//! - Noise: RMSE against a high-sample reference falls about as `N^-1/2` for
+//!   each effect, faster with the Sobol sampler.
+//!
+//! Numbers are printed with `--nocapture`.
+
+use glint::integrator::{AmbientOcclusion, AoSettings, Integrator, NoObserver, RayKind, Whitted};
+use glint::light::{is_delta, sample_light};
+use glint::math::{Keyframe, Motion, Ray, Vec2, Vec3};
+use glint::render::{
+    render_image, CameraModel, Control, PixelOffset, Sampler, SamplerKind, Settings,
+};
+use glint::scene::{
+    AreaShape, Background, Camera, Effects, Lens, Light, Material, Node, Phong, Scene, Shape,
+};
+use glint::stats::Counters;
+use glint::world::{BuildOptions, World};
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+fn shape(shape: Shape, material: usize) -> Node {
+    Node::Shape {
+        shape,
+        material: Some(material),
+    }
+}
+
+fn plane(normal: Vec3, offset: f32) -> Shape {
+    Shape::Plane { normal, offset }
+}
+
+fn sphere(center: Vec3, radius: f32) -> Shape {
+    Shape::Sphere { center, radius }
+}
+
+fn white() -> Material {
+    Material::Phong(Phong {
+        diffuse: Vec3::ONE,
+        ..Phong::default()
+    })
+}
+
+fn scene(camera: Camera, lights: Vec<Light>, materials: Vec<Material>, root: Node) -> Scene {
+    Scene {
+        camera,
+        lights,
+        background: Background {
+            color: Vec3::ZERO,
+            ambient: Vec3::ZERO,
+        },
+        materials,
+        root,
+        effects: Effects::default(),
+    }
+}
+
+fn look_down() -> Camera {
+    Camera::Perspective {
+        center: Vec3::new(0.0, 10.0, 0.0),
+        direction: Vec3::NEG_Y,
+        up: Vec3::Z,
+        angle_deg: 30.0,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Soft shadows
+
+/// Light: the square [-2,2]² at height 4. Occluder: the half-plane x < 0 at
+/// height 2 (two big triangles). Floor y = 0.
+const H_LIGHT: f32 = 4.0;
+const H_OCC: f32 = 2.0;
+
+fn penumbra_scene() -> Scene {
+    let quad = AreaShape::Quad {
+        corner: Vec3::new(-2.0, H_LIGHT, -2.0),
+        edge1: Vec3::new(4.0, 0.0, 0.0),
+        edge2: Vec3::new(0.0, 0.0, 4.0),
+    };
+    // Radiance 1: power = π · (two faces · 16).
+    let light = Light::Area {
+        shape: quad,
+        color: Vec3::ONE,
+        power: PI * 32.0,
+    };
+    let (a, b, c, d) = (
+        Vec3::new(-100.0, H_OCC, -100.0),
+        Vec3::new(0.0, H_OCC, -100.0),
+        Vec3::new(0.0, H_OCC, 100.0),
+        Vec3::new(-100.0, H_OCC, 100.0),
+    );
+    let root = Node::Group(vec![
+        shape(plane(Vec3::Y, 0.0), 0),
+        shape(Shape::Triangle([a, b, c]), 0),
+        shape(Shape::Triangle([a, c, d]), 0),
+    ]);
+    scene(look_down(), vec![light], vec![white()], root)
+}
+
+/// Irradiance at `p` (normal +y) from the light rectangle x ∈ [x0, x1],
+/// z ∈ [-2, 2] at height 4, of radiance 1: Lambert's formula
+/// `E = ½ Σ θ_i (n · û_i)` over the polygon's edges.
+fn lambert(p: Vec3, x0: f32, x1: f32) -> f64 {
+    let v = [
+        Vec3::new(x0, H_LIGHT, -2.0),
+        Vec3::new(x1, H_LIGHT, -2.0),
+        Vec3::new(x1, H_LIGHT, 2.0),
+        Vec3::new(x0, H_LIGHT, 2.0),
+    ]
+    .map(|q| (q - p).as_dvec3().normalize());
+    let mut e = 0.0;
+    for i in 0..4 {
+        let (a, b) = (v[i], v[(i + 1) % 4]);
+        let theta = a.dot(b).clamp(-1.0, 1.0).acos();
+        e += theta * a.cross(b).normalize().y;
+    }
+    0.5 * e.abs()
+}
+
+/// A one-sample Sobol stream past the pixel position.
+fn stream_of(sampler: &Sampler, k: u32) -> glint::render::SampleStream<'_> {
+    let mut s = sampler.stream((3, 7), k);
+    s.next_2d();
+    s
+}
+
+#[test]
+fn rectangle_light_past_an_occluder_edge() {
+    let sc = penumbra_scene();
+    let world = World::build_world_space(&sc, BuildOptions::default());
+    let light = &world.lights[0];
+    assert!(!is_delta(light));
+    let sampler = Sampler::new(SamplerKind::Sobol, 1, 1);
+    let n = 4096;
+    let mut worst_fraction: f32 = 0.0;
+    let mut worst_irradiance: f64 = 0.0;
+    for xp in [-1.5f32, -0.9, -0.5, 0.0, 0.4, 0.7, 1.2, 1.5, 2.5] {
+        let p = Vec3::new(xp, 0.0, 0.3);
+        // The occluder's edge x = 0 at height 2, seen from p, cuts the light
+        // at x = -xp: the light is visible for x > -xp.
+        let cut = (-xp).clamp(-2.0, 2.0);
+        let want = (2.0 - cut) / 4.0;
+
+        // Fraction of shadow rays that get through.
+        let mut st = stream_of(&sampler, 0);
+        let mut open = 0;
+        let mut c = Counters::default();
+        for u in st.split_2d(n) {
+            let inc = sample_light(light, p, u);
+            let ray = Ray::new(p + Vec3::Y * 1e-4, inc.to_light);
+            open += u32::from(!world.occluded(&ray, 0.0, inc.distance, &mut c));
+        }
+        let got = open as f32 / n as f32;
+        let err = (got - want).abs() / want.max(0.05);
+        worst_fraction = worst_fraction.max(err);
+        assert!(err < 0.02, "x = {xp}: fraction {got}, closed form {want}");
+
+        // The rendered floor: diffuse 1 times the irradiance of the visible
+        // part of the light.
+        let w = Whitted {
+            shadows: true,
+            shadow_samples: n,
+            ..Whitted::default()
+        };
+        let ray = Ray::new(Vec3::new(xp, 1.0, 0.3), Vec3::NEG_Y);
+        let mut st = stream_of(&sampler, 0);
+        let (col, _) = w.trace_sampled(
+            &world,
+            &ray,
+            0.0,
+            RayKind::Primary,
+            0,
+            1.0,
+            &mut st,
+            &mut c,
+            &mut NoObserver,
+        );
+        let want_e = if cut < 2.0 { lambert(p, cut, 2.0) } else { 0.0 };
+        let err = (col.x as f64 - want_e).abs() / want_e.max(0.05);
+        worst_irradiance = worst_irradiance.max(err);
+        assert!(
+            err < 0.02,
+            "x = {xp}: irradiance {}, Lambert {want_e}",
+            col.x
+        );
+    }
+    println!(
+        "penumbra: worst relative error {:.4}% (unoccluded fraction), {:.4}% (irradiance), {n} shadow rays",
+        100.0 * worst_fraction,
+        100.0 * worst_irradiance
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Ambient occlusion
+
+fn ao_at(world: &World, origin: Vec3, samples: u32, distance: f32) -> f32 {
+    let sampler = Sampler::new(SamplerKind::Sobol, 1, 5);
+    let ao = AmbientOcclusion {
+        settings: AoSettings { samples, distance },
+    };
+    let mut st = stream_of(&sampler, 0);
+    let ray = Ray::new(origin, Vec3::NEG_Y);
+    let (c, hit) = ao.li(
+        world,
+        &ray,
+        0.0,
+        &mut st,
+        &mut Counters::default(),
+        &mut NoObserver,
+    );
+    assert!(hit.is_some());
+    c.x
+}
+
+#[test]
+fn ambient_occlusion_open_plane_and_wall() {
+    let open = scene(
+        look_down(),
+        vec![],
+        vec![white()],
+        shape(plane(Vec3::Y, 0.0), 0),
+    );
+    let w = World::build_world_space(&open, BuildOptions::default());
+    for d in [1.0, 100.0, f32::INFINITY] {
+        assert_eq!(ao_at(&w, Vec3::new(0.3, 1.0, -2.0), 256, d), 1.0);
+    }
+    // Floor y = 0 and wall x = 0 (facing +x).
+    let corner = scene(
+        look_down(),
+        vec![],
+        vec![white()],
+        Node::Group(vec![
+            shape(plane(Vec3::Y, 0.0), 0),
+            shape(plane(Vec3::X, 0.0), 0),
+        ]),
+    );
+    let w = World::build_world_space(&corner, BuildOptions::default());
+    let max_d = 2.0;
+    let mut worst: f32 = 0.0;
+    for d in [0.1f32, 0.3, 0.6, 1.0, 1.5, 2.5] {
+        let a = (d / max_d).min(1.0);
+        let want = 1.0 - (a.acos() - a * (1.0 - a * a).sqrt()) / PI;
+        let got = ao_at(&w, Vec3::new(d, 0.5, 0.0), 4096, max_d);
+        let err = (got - want).abs() / want;
+        worst = worst.max(err);
+        assert!(err < 0.02, "d = {d}: AO {got}, closed form {want}");
+    }
+    // With no distance limit the wall hides exactly half (cosine-weighted).
+    let got = ao_at(&w, Vec3::new(0.7, 0.5, 0.0), 4096, f32::INFINITY);
+    assert!((got - 0.5).abs() < 0.01, "{got}");
+    println!(
+        "ambient occlusion: worst relative error {:.4}%",
+        100.0 * worst
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Rendering helpers
+
+const BLACK_BG: Background = Background {
+    color: Vec3::ZERO,
+    ambient: Vec3::ONE,
+};
+
+/// Renders `scene` with `spp` samples of `kind` (seed `seed`) at `size`.
+fn render_with(
+    sc: &Scene,
+    integrator: &impl Integrator,
+    size: u32,
+    kind: SamplerKind,
+    spp: u32,
+    seed: u64,
+) -> Vec<Vec3> {
+    let world = World::build(sc, BuildOptions::default());
+    let cam = CameraModel::new(&world.camera).with_lens(sc.effects.lens);
+    let mut s = Settings::one_ray((size, size), PixelOffset::CENTER);
+    s.sampler = Sampler::new(kind, spp, seed);
+    render_image(&world, &cam, integrator, &s, Control::default())
+        .frame
+        .color
+}
+
+fn rmse(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let s: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (*x - *y).length_squared() as f64 / 3.0)
+        .sum();
+    (s / a.len() as f64).sqrt()
+}
+
+// ---------------------------------------------------------------------------
+// Depth of field
+
+const W: u32 = 64;
+const FOCUS: f32 = 5.0;
+const ANGLE: f32 = 30.0;
+
+/// A tiny self-lit sphere at `p` seen by a camera at the origin looking
+/// down -z, focused at [`FOCUS`], with lens radius `aperture`.
+fn dot_scene(p: Vec3, radius: f32, aperture: f32) -> Scene {
+    let mut sc = scene(
+        Camera::Perspective {
+            center: Vec3::ZERO,
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            angle_deg: ANGLE,
+        },
+        vec![],
+        vec![white()],
+        shape(sphere(p, radius), 0),
+    );
+    sc.background = BLACK_BG;
+    sc.effects.lens = Lens {
+        aperture,
+        focus_distance: FOCUS,
+        ..Lens::default()
+    };
+    sc
+}
+
+/// Intensity-weighted centroid (pixels, x right, y down) and RMS radius.
+fn spot(img: &[Vec3]) -> (Vec2, f32) {
+    let mut sum = 0.0f64;
+    let mut c = glam::DVec2::ZERO;
+    for (i, p) in img.iter().enumerate() {
+        let w = p.x as f64;
+        c += w * glam::DVec2::new((i as u32 % W) as f64 + 0.5, (i as u32 / W) as f64 + 0.5);
+        sum += w;
+    }
+    let c = c / sum;
+    let mut m2 = 0.0;
+    for (i, p) in img.iter().enumerate() {
+        let q = glam::DVec2::new((i as u32 % W) as f64 + 0.5, (i as u32 / W) as f64 + 0.5);
+        m2 += p.x as f64 * (q - c).length_squared();
+    }
+    (c.as_vec2(), (m2 / sum).sqrt() as f32)
+}
+
+/// Where the pinhole projects `p` (pixels, y down).
+fn project(p: Vec3) -> Vec2 {
+    let span = 2.0 * (ANGLE.to_radians() / 2.0).tan();
+    let z = -p.z;
+    Vec2::new(
+        (0.5 + p.x / z / span) * W as f32,
+        (0.5 - p.y / z / span) * W as f32,
+    )
+}
+
+#[test]
+fn thin_lens_focus_and_blur() {
+    let w = Whitted::default();
+    // On the focus plane: sharp at any aperture.
+    let p = Vec3::new(0.4, 0.25, -FOCUS);
+    for aperture in [0.0, 0.1, 0.3] {
+        let img = render_with(
+            &dot_scene(p, 0.01, aperture),
+            &w,
+            W,
+            SamplerKind::Sobol,
+            256,
+            0,
+        );
+        let (c, r) = spot(&img);
+        let want = project(p);
+        println!(
+            "in focus, aperture {aperture}: centroid {c}, expected {want}, rms radius {r:.3} px"
+        );
+        assert!(
+            (c - want).length() < 1.0,
+            "aperture {aperture}: {c} vs {want}"
+        );
+        assert!(r < 1.0, "aperture {aperture}: rms radius {r}");
+    }
+    // Off the plane (depth 3): a disk of radius a·(f − z)/z on the focus
+    // plane, i.e. a·(f − z)/(z·f·span) of the image width.
+    let q = Vec3::new(0.1, -0.1, -3.0);
+    let span = 2.0 * (ANGLE.to_radians() / 2.0).tan();
+    let (_, r0) = spot(&render_with(
+        &dot_scene(q, 0.005, 0.0),
+        &w,
+        W,
+        SamplerKind::Sobol,
+        256,
+        0,
+    ));
+    let mut radii = Vec::new();
+    for aperture in [0.15f32, 0.3] {
+        let img = render_with(
+            &dot_scene(q, 0.005, aperture),
+            &w,
+            W,
+            SamplerKind::Sobol,
+            256,
+            0,
+        );
+        let (c, r) = spot(&img);
+        // Uniform disk of radius R: mean squared radius R²/2.
+        let measured = (2.0 * (r * r - r0 * r0)).max(0.0).sqrt();
+        let want = aperture * (FOCUS - 3.0) / (3.0 * FOCUS * span) * W as f32;
+        println!(
+            "off focus, aperture {aperture}: blur radius {measured:.3} px, thin lens {want:.3} px, centroid {c}"
+        );
+        assert!((c - project(q)).length() < 0.5);
+        assert!((measured - want).abs() < 0.1 * want, "{measured} vs {want}");
+        radii.push(measured);
+    }
+    let ratio = radii[1] / radii[0];
+    assert!(
+        (ratio - 2.0).abs() < 0.1,
+        "blur grows as the aperture: ratio {ratio}"
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Motion blur
+
+fn slide(from: Vec3, to: Vec3) -> Arc<Motion> {
+    Arc::new(
+        Motion::new(vec![
+            Keyframe {
+                translation: from,
+                ..Keyframe::identity(0.0)
+            },
+            Keyframe {
+                translation: to,
+                ..Keyframe::identity(1.0)
+            },
+        ])
+        .unwrap(),
+    )
+}
+
+fn ball_scene(root: Node, shutter: [f32; 2]) -> Scene {
+    let mut sc = scene(
+        Camera::Perspective {
+            center: Vec3::new(0.0, 0.0, 6.0),
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            angle_deg: 40.0,
+        },
+        vec![Light::Directional {
+            direction: Vec3::new(-0.3, -1.0, -0.6),
+            color: Vec3::splat(0.8),
+        }],
+        vec![
+            white(),
+            Material::Phong(Phong {
+                diffuse: Vec3::new(0.9, 0.3, 0.2),
+                ..Phong::default()
+            }),
+        ],
+        root,
+    );
+    sc.background = Background {
+        color: Vec3::new(0.1, 0.1, 0.2),
+        ambient: Vec3::splat(0.2),
+    };
+    sc.effects.lens.shutter = shutter;
+    sc
+}
+
+fn moving_ball() -> Node {
+    Node::Group(vec![
+        shape(plane(Vec3::Z, -1.5), 0),
+        Node::Moving {
+            motion: slide(Vec3::new(-1.2, 0.0, 0.0), Vec3::new(1.2, 0.3, 0.0)),
+            child: Box::new(shape(sphere(Vec3::ZERO, 0.6), 1)),
+        },
+    ])
+}
+
+#[test]
+fn moving_sphere_is_the_mean_of_static_ones() {
+    let w = Whitted {
+        shadows: true,
+        ..Whitted::default()
+    };
+    let size = 48;
+    let spp = 256;
+    let blurred = render_with(
+        &ball_scene(moving_ball(), [0.0, 1.0]),
+        &w,
+        size,
+        SamplerKind::Sobol,
+        spp,
+        0,
+    );
+    let again = render_with(
+        &ball_scene(moving_ball(), [0.0, 1.0]),
+        &w,
+        size,
+        SamplerKind::Sobol,
+        spp,
+        9,
+    );
+    // Static renders at 32 instants spread over the shutter.
+    let k = 32;
+    let mut mean = vec![Vec3::ZERO; (size * size) as usize];
+    for i in 0..k {
+        let t = (i as f32 + 0.5) / k as f32;
+        let m = slide(Vec3::new(-1.2, 0.0, 0.0), Vec3::new(1.2, 0.3, 0.0)).matrix(t);
+        let root = Node::Group(vec![
+            shape(plane(Vec3::Z, -1.5), 0),
+            Node::Transform {
+                matrix: m,
+                child: Box::new(shape(sphere(Vec3::ZERO, 0.6), 1)),
+            },
+        ]);
+        let img = render_with(
+            &ball_scene(root, [0.0, 0.0]),
+            &w,
+            size,
+            SamplerKind::Sobol,
+            spp / 8,
+            i as u64,
+        );
+        for (a, b) in mean.iter_mut().zip(img) {
+            *a += b / k as f32;
+        }
+    }
+    let halfway = {
+        let root = Node::Group(vec![
+            shape(plane(Vec3::Z, -1.5), 0),
+            shape(sphere(Vec3::new(0.0, 0.15, 0.0), 0.6), 1),
+        ]);
+        render_with(
+            &ball_scene(root, [0.0, 0.0]),
+            &w,
+            size,
+            SamplerKind::Sobol,
+            spp,
+            0,
+        )
+    };
+    let noise = rmse(&blurred, &again);
+    let to_mean = rmse(&blurred, &mean);
+    let to_static = rmse(&blurred, &halfway);
+    println!(
+        "motion: RMSE to the mean of {k} static renders {to_mean:.4}, between two seeds {noise:.4}, to the static halfway render {to_static:.4}"
+    );
+    assert!(to_mean < 2.0 * noise + 0.005, "{to_mean} vs noise {noise}");
+    assert!(to_static > 10.0 * to_mean);
+}
+
+// ---------------------------------------------------------------------------
+// Noise against samples
+
+/// Least-squares slope of log RMSE against log N.
+fn slope(ns: &[u32], errs: &[f64]) -> f64 {
+    let xs: Vec<f64> = ns.iter().map(|&n| (n as f64).ln()).collect();
+    let ys: Vec<f64> = errs.iter().map(|e| e.ln()).collect();
+    let mx = xs.iter().sum::<f64>() / xs.len() as f64;
+    let my = ys.iter().sum::<f64>() / ys.len() as f64;
+    let num: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let den: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
+    num / den
+}
+
+/// RMSE against a 4096-sample Sobol reference at N = 4, 16, 64 camera
+/// samples for the random and the Sobol sampler; checks the slopes.
+fn convergence(name: &str, sc: &Scene, integrator: &impl Integrator, size: u32) {
+    let reference = render_with(sc, integrator, size, SamplerKind::Sobol, 4096, 1234);
+    let ns = [4u32, 16, 64];
+    let mut report = format!("{name}:");
+    let mut at_64 = Vec::new();
+    for kind in [SamplerKind::Random, SamplerKind::Sobol] {
+        let errs: Vec<f64> = ns
+            .iter()
+            .map(|&n| rmse(&render_with(sc, integrator, size, kind, n, 7), &reference))
+            .collect();
+        let s = slope(&ns, &errs);
+        report += &format!(
+            "  {kind}: RMSE {:.4} {:.4} {:.4}, slope {s:.2};",
+            errs[0], errs[1], errs[2]
+        );
+        match kind {
+            SamplerKind::Random => assert!(
+                (-0.75..=-0.35).contains(&s),
+                "{name}: random slope {s} ({errs:?})"
+            ),
+            _ => assert!(s < -0.35, "{name}: sobol slope {s} ({errs:?})"),
+        }
+        at_64.push(errs[2]);
+    }
+    println!("{report}");
+    assert!(
+        at_64[1] < at_64[0],
+        "{name}: sobol {} vs random {}",
+        at_64[1],
+        at_64[0]
+    );
+}
+
+#[test]
+fn noise_falls_with_samples_soft_shadows() {
+    let sc = {
+        let mut sc = penumbra_scene();
+        sc.camera = Camera::Perspective {
+            center: Vec3::new(0.0, 1.5, 0.0),
+            direction: Vec3::NEG_Y,
+            up: Vec3::Z,
+            angle_deg: 120.0,
+        };
+        sc
+    };
+    let w = Whitted {
+        shadows: true,
+        ..Whitted::default()
+    };
+    convergence("soft shadows", &sc, &w, 24);
+}
+
+#[test]
+fn noise_falls_with_samples_glossy() {
+    let mut sc = ball_scene(
+        Node::Group(vec![
+            shape(plane(Vec3::Z, -1.5), 0),
+            shape(sphere(Vec3::new(-1.0, 0.0, 0.0), 0.5), 1),
+            shape(sphere(Vec3::new(0.6, 0.0, 0.5), 0.8), 2),
+        ]),
+        [0.0, 0.0],
+    );
+    sc.materials.push(Material::Phong(Phong {
+        diffuse: Vec3::splat(0.05),
+        reflective: Vec3::splat(0.8),
+        glossiness: 0.3,
+        ..Phong::default()
+    }));
+    let w = Whitted {
+        bounces: 1,
+        ..Whitted::default()
+    };
+    convergence("glossy", &sc, &w, 24);
+}
+
+#[test]
+fn noise_falls_with_samples_motion_and_lens() {
+    let w = Whitted::default();
+    convergence(
+        "motion blur",
+        &ball_scene(moving_ball(), [0.0, 1.0]),
+        &w,
+        24,
+    );
+    let mut sc = ball_scene(
+        Node::Group(vec![
+            shape(plane(Vec3::Z, -1.5), 0),
+            shape(sphere(Vec3::new(-0.8, 0.0, 1.5), 0.5), 1),
+            shape(sphere(Vec3::new(0.8, 0.0, -0.5), 0.5), 1),
+        ]),
+        [0.0, 0.0],
+    );
+    sc.effects.lens.aperture = 0.25;
+    sc.effects.lens.focus_distance = 6.0;
+    convergence("depth of field", &sc, &w, 24);
+}
+
+#[test]
+fn noise_falls_with_samples_ambient_occlusion() {
+    let sc = ball_scene(
+        Node::Group(vec![
+            shape(plane(Vec3::Y, -0.6), 0),
+            shape(sphere(Vec3::new(-0.5, 0.0, 0.0), 0.6), 1),
+            shape(sphere(Vec3::new(0.7, -0.2, 0.4), 0.4), 1),
+        ]),
+        [0.0, 0.0],
+    );
+    let ao = AmbientOcclusion {
+        settings: AoSettings {
+            samples: 1,
+            distance: 2.0,
+        },
+    };
+    convergence("ambient occlusion", &sc, &ao, 24);
+}
+
+/// Splitting: N shadow (AO) rays per camera sample at one camera sample per
+/// pixel also converges, and Sobol splits beat random ones.
+#[test]
+fn split_rays_converge_too() {
+    let sc = penumbra_scene();
+    let world = World::build_world_space(&sc, BuildOptions::default());
+    let points: Vec<Vec3> = (0..64)
+        .map(|i| Vec3::new(-2.5 + 5.0 * (i as f32 + 0.5) / 64.0, 1.0, 0.2))
+        .collect();
+    let shade = |kind: SamplerKind, n: u32, seed: u64| -> Vec<Vec3> {
+        let sampler = Sampler::new(kind, 1, seed);
+        let w = Whitted {
+            shadows: true,
+            shadow_samples: n,
+            ..Whitted::default()
+        };
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, &o)| {
+                let mut st = sampler.stream((i as u32, 0), 0);
+                st.next_2d();
+                w.trace_sampled(
+                    &world,
+                    &Ray::new(o, Vec3::NEG_Y),
+                    0.0,
+                    RayKind::Primary,
+                    0,
+                    1.0,
+                    &mut st,
+                    &mut Counters::default(),
+                    &mut NoObserver,
+                )
+                .0
+            })
+            .collect()
+    };
+    let reference = shade(SamplerKind::Sobol, 16384, 99);
+    let ns = [4u32, 16, 64, 256];
+    let mut finals = Vec::new();
+    for kind in [SamplerKind::Random, SamplerKind::Sobol] {
+        // Averaged over seeds: one row of 64 points is a small sample.
+        let errs: Vec<f64> = ns
+            .iter()
+            .map(|&n| {
+                let mean_square = (0..8)
+                    .map(|seed| rmse(&shade(kind, n, seed), &reference).powi(2))
+                    .sum::<f64>()
+                    / 8.0;
+                mean_square.sqrt()
+            })
+            .collect();
+        let s = slope(&ns, &errs);
+        println!("split shadow rays, {kind}: RMSE {errs:.5?}, slope {s:.2}");
+        assert!(s < -0.35, "{kind}: slope {s}");
+        finals.push(errs[3]);
+    }
+    assert!(finals[1] < finals[0]);
+}
+
+// ---------------------------------------------------------------------------
+// Ray counts: the lecture's cost formula
+
+const COUNT_SCENE: &str = "PerspectiveCamera { center 0 0 5 direction 0 0 -1 up 0 1 0 angle 20\n\
+    aperture 0.05 focusDistance 5 shutter 0 1 }\n\
+    Lights { numLights 1 AreaLight { quad { corner -1 -1 3 edge1 2 0 0 edge2 0 2 0 } color 1 1 1 power 30 } }\n\
+    Samples { shadow 3 glossy 1 time 2 lens 5 }\n\
+    AmbientOcclusion { samples 7 distance 1 }\n\
+    Background { ambientLight 0.2 0.2 0.2 }\n\
+    Group { numObjects 1 Plane { normal 0 0 1 offset 0 } }\n";
+
+fn count_scene_path() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("glint-distribution-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("counts.txt");
+    std::fs::write(&path, COUNT_SCENE).unwrap();
+    path
+}
+
+/// Camera rays = pixels × spp × time × lens; shadow rays = camera rays ×
+/// shadow samples (one area light, every hit lit); AO rays = camera rays ×
+/// AO samples. Command-line counts override the scene's.
+#[test]
+fn ray_counts_follow_the_cost_formula() {
+    use glint::job::{Job, SampleOverrides};
+    let path = count_scene_path();
+    let (w, h) = (8u32, 6u32);
+    let mut job = Job::new(path.clone(), w, h);
+    job.integrator.shadows = true;
+    job.sampler = Some(Sampler::new(SamplerKind::Sobol, 4, 0));
+    let c = job.run().unwrap().counters;
+    let camera = u64::from(w * h) * 4 * 2 * 5;
+    assert_eq!(c.primary, camera);
+    assert_eq!(c.shadow, camera * 3);
+    assert_eq!(c.occlusion, camera * 7);
+    assert_eq!(c.rays_total(), camera * (1 + 3 + 7));
+
+    job.effect_samples = SampleOverrides {
+        shadow: Some(2),
+        time: Some(3),
+        lens: Some(1),
+        ao: Some(4),
+        ..SampleOverrides::default()
+    };
+    let c = job.run().unwrap().counters;
+    let camera = u64::from(w * h) * 4 * 3;
+    assert_eq!(c.primary, camera);
+    assert_eq!(c.shadow, camera * 2);
+    assert_eq!(c.occlusion, camera * 4);
+
+    // The AO image: one AO probe set per camera ray, no shadow rays.
+    job.ao_image = true;
+    let r = job.run().unwrap();
+    assert_eq!(r.counters.shadow, 0);
+    assert_eq!(r.counters.occlusion, camera * 4);
+    assert!(
+        r.frame.color.iter().all(|c| c.x > 0.99),
+        "an open plane is unoccluded"
+    );
+}
+
+/// `glint render` takes the flags and `--stats` lists every kind of ray.
+#[test]
+fn cli_flags_and_stats() {
+    let path = count_scene_path();
+    let out = path.with_file_name("counts.png");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .args([
+            "--size",
+            "4",
+            "4",
+            "--shadows",
+            "--stats",
+            "--quiet",
+            "--spp",
+            "2",
+        ])
+        .args([
+            "--shadow-samples",
+            "5",
+            "--glossy-samples",
+            "2",
+            "--time-samples",
+            "3",
+        ])
+        .args(["--lens-samples", "1", "--ao-samples", "2"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let value = |key: &str| -> u64 {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(key))
+            .unwrap_or_else(|| panic!("{key} in {text}"));
+        line[key.len()..].trim().parse().unwrap()
+    };
+    let camera = 16 * 2 * 3;
+    assert_eq!(value("primary rays"), camera);
+    assert_eq!(value("shadow rays"), camera * 5);
+    assert_eq!(value("occlusion rays"), camera * 2);
+    assert_eq!(value("  of which glossy"), 0);
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .args(["--shadow-samples", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}
