@@ -118,6 +118,7 @@ fn lattice_scene() -> Scene {
         background: Background::default(),
         materials: vec![Material::Phong(Phong::default())],
         root: Node::Group(kids),
+        effects: Default::default(),
     }
 }
 
@@ -342,6 +343,7 @@ fn balls_on_a_floor() -> Scene {
             }),
         ],
         root: Node::Group(kids),
+        effects: Default::default(),
     }
 }
 

@@ -27,6 +27,7 @@ fn scene(root: Node, materials: Vec<Phong>, lights: Vec<Light>, bg: Background) 
         background: bg,
         materials: materials.into_iter().map(Material::Phong).collect(),
         root,
+        effects: Default::default(),
     }
 }
 
