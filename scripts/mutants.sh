@@ -50,7 +50,9 @@ for target in "$@"; do
   echo "== $target"
   # cargo-mutants exits non-zero when a mutant is missed: keep going.
   # shellcheck disable=SC2046
-  cargo mutants --in-place --profile mutants --timeout "${MUTANTS_TIMEOUT:-300}" \
+  # MUTANTS_ARGS passes more options, e.g. "--baseline=skip" or "--shard 0/8".
+  # shellcheck disable=SC2086
+  cargo mutants --in-place --profile mutants --timeout "${MUTANTS_TIMEOUT:-300}" ${MUTANTS_ARGS:-} \
     "${files[@]}" --output "mutants/$name" -- $(tests_for "$target") || true
   for kind in caught missed timeout unviable; do
     f="mutants/$name/mutants.out/$kind.txt"
