@@ -429,3 +429,58 @@ fn phong_highlight_sits_at_the_half_vector() {
         );
     }
 }
+
+/// Area lights through `glint::light`'s public sampling, against the closed
+/// form for a disk: a disk of radius `R` and radiance `L` at height `h`
+/// straight above a point facing it gives irradiance `π·L·R²/(h² + R²)`.
+/// The radiance of a light of power `Φ` over a two-sided disk is
+/// `Φ / (π · 2πR²)`. Point and directional lights are single-direction
+/// (delta) lights, an area light is not.
+#[test]
+fn area_light_irradiance_matches_the_disk_closed_form() {
+    use glint::light::{is_delta, sample_light};
+    use glint::math::Vec2;
+    use glint::scene::AreaShape;
+    let (r, power) = (0.5f32, 10.0f32);
+    let light = Light::Area {
+        shape: AreaShape::Disk {
+            center: Vec3::ZERO,
+            normal: Vec3::NEG_Y,
+            radius: r,
+        },
+        color: Vec3::ONE,
+        power,
+    };
+    assert!(!is_delta(&light));
+    assert!(is_delta(&Light::Point {
+        position: Vec3::ZERO,
+        color: Vec3::ONE,
+        attenuation: Vec3::X,
+    }));
+    assert!(is_delta(&Light::Directional {
+        direction: Vec3::NEG_Y,
+        color: Vec3::ONE,
+    }));
+    let radiance =
+        power as f64 / (std::f64::consts::PI * 2.0 * std::f64::consts::PI * (r * r) as f64);
+    for h in [0.25f32, 1.0, 3.0] {
+        let p = Vec3::new(0.0, -h, 0.0);
+        // The mean over a fine grid of samples is the estimate of E.
+        let k = 64;
+        let mut sum = 0.0f64;
+        for i in 0..k {
+            for j in 0..k {
+                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                let inc = sample_light(&light, p, u);
+                sum += (inc.color.x * inc.to_light.dot(Vec3::Y).max(0.0)) as f64;
+            }
+        }
+        let e = sum / (k * k) as f64;
+        let (h, r) = (h as f64, r as f64);
+        let expected = std::f64::consts::PI * radiance * r * r / (h * h + r * r);
+        assert!(
+            (e - expected).abs() < 1e-2 * expected,
+            "h {h}: irradiance {e}, closed form {expected}"
+        );
+    }
+}
