@@ -5,7 +5,8 @@
 //! `1/(a + b·d + c·d²)`, the half vector), never from glint's own optics or
 //! shading functions; what is measured is what `Whitted::trace` does to a real
 //! world, watched through a `RayRecorder`. Worlds are built in world space so
-//! the numbers in the scenes are the numbers the formulas use.
+//! the numbers in the scenes are the numbers the formulas use. Area lights
+//! are checked through `light::sample_light`, the sampling the ray tree calls.
 
 use glint::integrator::{RayKind, RayRecorder, RecordedRay, Whitted};
 use glint::math::{Ray, Vec3};
