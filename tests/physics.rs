@@ -217,6 +217,19 @@ fn ray_tree_weights_and_colour_are_products_of_coefficients() {
     };
     assert_eq!(weight(RayKind::Reflected), 0.5);
     assert_eq!(weight(RayKind::Transmitted), 0.4);
+    // The mirror ray leaves at the angle it came in: d with its y negated.
+    let mirrored = rays
+        .iter()
+        .find(|x| x.kind == RayKind::Reflected)
+        .unwrap()
+        .ray
+        .dir
+        .normalize();
+    let expected_dir = Vec3::new(d.x, -d.y, d.z);
+    assert!(
+        (mirrored - expected_dir).length() < 1e-6,
+        "reflected {mirrored}, expected {expected_dir}"
+    );
 
     // Two sheets: every ray's weight is the product along its path, so the
     // depth-2 weights are the pairwise products of 0.5 and 0.4.
