@@ -238,3 +238,22 @@ pub fn course_data(test: &str) -> Option<CourseData> {
         refs: references(test)?,
     })
 }
+
+/// The four one-pixel moves (right, left, down, up) the image checks must see.
+pub const ONE_PIXEL_SHIFTS: [(i32, i32); 4] = [(1, 0), (-1, 0), (0, 1), (0, -1)];
+
+/// A `w`×`h` image (row-major, top row first) moved by `(dx, dy)` pixels;
+/// the row or column uncovered at the edge repeats its neighbour, so the
+/// shift is all that changes.
+pub fn shifted(w: u32, h: u32, pixels: &[[u8; 3]], dx: i32, dy: i32) -> Vec<[u8; 3]> {
+    assert_eq!(pixels.len(), (w * h) as usize, "pixel count");
+    let (w, h) = (w as i32, h as i32);
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let sx = (x - dx).clamp(0, w - 1);
+            let sy = (y - dy).clamp(0, h - 1);
+            pixels[(sy * w + sx) as usize]
+        })
+        .collect()
+}
