@@ -208,22 +208,45 @@ fn rectangle_light_past_an_occluder_edge() {
 // Ambient occlusion
 
 fn ao_at(world: &World, origin: Vec3, samples: u32, distance: f32) -> f32 {
+    ao_along(world, Ray::new(origin, Vec3::NEG_Y), samples, distance).0
+}
+
+/// The AO integrator's grey value for one camera ray, and the counters.
+fn ao_along(world: &World, ray: Ray, samples: u32, distance: f32) -> (f32, Counters) {
     let sampler = Sampler::new(SamplerKind::Sobol, 1, 5);
     let ao = AmbientOcclusion {
         settings: AoSettings { samples, distance },
     };
     let mut st = stream_of(&sampler, 0);
-    let ray = Ray::new(origin, Vec3::NEG_Y);
-    let (c, hit) = ao.li(
-        world,
-        &ray,
-        0.0,
-        &mut st,
-        &mut Counters::default(),
-        &mut NoObserver,
-    );
+    let mut counters = Counters::default();
+    let (c, hit) = ao.li(world, &ray, 0.0, &mut st, &mut counters, &mut NoObserver);
     assert!(hit.is_some());
-    c.x
+    (c.x, counters)
+}
+
+#[test]
+fn ambient_occlusion_tests_the_side_the_ray_sees() {
+    // A floor y = 0 (normal +y) with a ball resting above it, next to the
+    // point x = 0.6 the rays hit. From above, the ball hides part of the
+    // sky; from below (the floor's back face), nothing is there: the
+    // hemisphere must turn to the side the ray came from.
+    let s = scene(
+        look_down(),
+        vec![],
+        vec![white()],
+        Node::Group(vec![
+            shape(plane(Vec3::Y, 0.0), 0),
+            shape(sphere(Vec3::new(0.0, 0.5, 0.0), 0.5), 0),
+        ]),
+    );
+    let w = World::build_world_space(&s, BuildOptions::default());
+    let p = Vec3::new(0.6, 0.0, 0.0);
+    let (above, _) = ao_along(&w, Ray::new(p + 3.0 * Vec3::Y, Vec3::NEG_Y), 256, 10.0);
+    let (below, counters) = ao_along(&w, Ray::new(p - 3.0 * Vec3::Y, Vec3::Y), 256, 10.0);
+    assert!(above < 0.9, "the ball hides part of the sky above: {above}");
+    assert_eq!(below, 1.0, "nothing is below the floor");
+    // One camera ray and one occlusion ray per sample.
+    assert_eq!((counters.primary, counters.occlusion), (1, 256));
 }
 
 #[test]
