@@ -112,3 +112,29 @@ impl RayObserver for RayRecorder {
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An observer that keeps only what `ray` is told.
+    #[derive(Default)]
+    struct Rays(Vec<(RayKind, f32, u32)>);
+
+    impl RayObserver for Rays {
+        fn ray(&mut self, kind: RayKind, _: &Ray, t_end: f32, depth: u32, _: f32, _: Option<Vec3>) {
+            self.0.push((kind, t_end, depth));
+        }
+    }
+
+    #[test]
+    fn default_shadow_reports_a_shadow_ray_ending_at_the_light_or_nan() {
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        let mut o = Rays::default();
+        o.shadow(&ray, 2.5, false, 1);
+        o.shadow(&ray, 2.5, true, 3);
+        assert_eq!(o.0[0], (RayKind::Shadow, 2.5, 1));
+        assert_eq!((o.0[1].0, o.0[1].2), (RayKind::Shadow, 3));
+        assert!(o.0[1].1.is_nan(), "a blocked shadow ray does not say where");
+    }
+}
