@@ -307,3 +307,55 @@ fn back_faces_are_black_unless_shade_back() {
         "{lit}"
     );
 }
+
+/// The statistics count exactly the rays the tree holds, kind by kind: a
+/// primary ray through a glass ball (reflective and transparent) above a
+/// floor, with shadows and ambient occlusion, spawns every kind of ray.
+#[test]
+fn counters_count_each_kind_of_ray_in_the_tree() {
+    let glass = Phong {
+        diffuse: Vec3::splat(0.1),
+        reflective: Vec3::splat(0.3),
+        transparent: Vec3::splat(0.7),
+        ior: 1.5,
+        ..Phong::default()
+    };
+    let scene = floor_scene(glass);
+    let world = World::build(&scene, BuildOptions::default());
+    let w = Whitted {
+        bounces: 4,
+        shadows: true,
+        ambient_occlusion: Some(glint::integrator::AoSettings {
+            samples: 3,
+            distance: 1.0,
+        }),
+        ..Whitted::default()
+    };
+    let eye = world.ray_from_world(&Ray::new(Vec3::new(0.1, 5.0, 0.05), Vec3::NEG_Y));
+    let mut rec = RayRecorder::default();
+    let mut c = Counters::default();
+    w.trace(
+        &world,
+        &eye,
+        0.0,
+        RayKind::Primary,
+        0,
+        1.0,
+        &mut c,
+        &mut rec,
+    );
+    let count = |k: RayKind| rec.rays.iter().filter(|r| r.kind == k).count() as u64;
+    let tree = [
+        count(RayKind::Primary),
+        count(RayKind::Reflected),
+        count(RayKind::Transmitted),
+        count(RayKind::Shadow),
+        count(RayKind::Occlusion),
+    ];
+    assert_eq!(
+        [c.primary, c.reflected, c.refracted, c.shadow, c.occlusion],
+        tree
+    );
+    assert_eq!(tree[0], 1);
+    assert!(tree.iter().all(|&n| n > 0), "every kind traced: {tree:?}");
+}

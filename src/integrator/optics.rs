@@ -64,7 +64,14 @@ mod tests {
 
     #[test]
     fn extreme_index_ratios_stay_finite() {
-        for (n_i, n_t) in [(1.0, 3e38), (3e38, 1.0), (1.0, 1e-38), (1e-38, 1.0)] {
+        for (n_i, n_t) in [
+            (1.0, 3e38),
+            (3e38, 1.0),
+            (1.0, 1e-38),
+            (1e-38, 1.0),
+            // eta overflows to infinity: the direction falls back to -n.
+            (3e38, 1e-38),
+        ] {
             for d in [Vec3::NEG_Y, Vec3::new(1e-3, -1.0, 0.0).normalize()] {
                 if let Some(t) = refract(d, Vec3::Y, n_i, n_t) {
                     assert!(t.is_finite(), "{n_i} -> {n_t}: {t}");
