@@ -59,7 +59,7 @@ pub fn unoccluded(
     for u in stream.split_2d(k) {
         let w = cosine_hemisphere(n, u);
         let ray = from.spawn_ray(w).at_time(time);
-        c.occlusion += 1;
+        super::count_ray(c, RayKind::Occlusion);
         let blocked = world.occluded(&ray, 0.0, ao.distance, c);
         obs.ray(
             RayKind::Occlusion,
@@ -92,7 +92,7 @@ impl Integrator for AmbientOcclusion {
         counters: &mut Counters,
         observer: &mut impl RayObserver,
     ) -> (Vec3, Option<Hit>) {
-        counters.primary += 1;
+        super::count_ray(counters, RayKind::Primary);
         let hit = world.intersect(ray, tmin, f32::INFINITY, counters);
         observer.ray(
             RayKind::Primary,

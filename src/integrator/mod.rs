@@ -17,6 +17,18 @@ use crate::sampler::SampleStream;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 
+/// Adds a ray of `kind` to the statistics: the one place that maps a ray's
+/// role to its counter, for every integrator.
+pub(crate) fn count_ray(c: &mut Counters, kind: RayKind) {
+    match kind {
+        RayKind::Primary => c.primary += 1,
+        RayKind::Reflected => c.reflected += 1,
+        RayKind::Transmitted => c.refracted += 1,
+        RayKind::Shadow => c.shadow += 1,
+        RayKind::Occlusion => c.occlusion += 1,
+    }
+}
+
 /// Radiance along camera rays: the one interface between the render loop and
 /// the light transport.
 ///

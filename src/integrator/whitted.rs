@@ -102,13 +102,7 @@ impl Whitted {
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> (Vec3, Option<Hit>) {
-        match kind {
-            RayKind::Primary => c.primary += 1,
-            RayKind::Reflected => c.reflected += 1,
-            RayKind::Transmitted => c.refracted += 1,
-            RayKind::Shadow => c.shadow += 1,
-            RayKind::Occlusion => c.occlusion += 1,
-        }
+        super::count_ray(c, kind);
         let hit = world.intersect(ray, tmin, f32::INFINITY, c);
         obs.ray(
             kind,
@@ -347,7 +341,7 @@ impl Whitted {
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> Vec3 {
-        c.shadow += 1;
+        super::count_ray(c, RayKind::Shadow);
         if !self.transparent_shadows {
             let (shadow, tmax) = target.ray_from(&from, time);
             let blocked = world.occluded(&shadow, 0.0, tmax, c);
