@@ -291,6 +291,63 @@ fn ambient_occlusion_open_plane_and_wall() {
     );
 }
 
+#[test]
+fn whitted_scales_only_its_ambient_term_by_ambient_occlusion() {
+    // Floor y = 0 and wall x = 0, no distance limit: the wall hides half the
+    // cosine-weighted hemisphere of a floor point, so the ambient term
+    // (ambient 0.4 x diffuse 1) halves. A directional light straight down
+    // adds its Lambert term 0.5 x cos 0, which AO must not touch.
+    let mut corner = scene(
+        look_down(),
+        vec![Light::Directional {
+            direction: Vec3::NEG_Y,
+            color: Vec3::splat(0.5),
+        }],
+        vec![white()],
+        Node::Group(vec![
+            shape(plane(Vec3::Y, 0.0), 0),
+            shape(plane(Vec3::X, 0.0), 0),
+        ]),
+    );
+    corner.background.ambient = Vec3::splat(0.4);
+    let world = World::build_world_space(&corner, BuildOptions::default());
+    let sampler = Sampler::new(SamplerKind::Sobol, 1, 5);
+    let ray = Ray::new(Vec3::new(0.7, 0.5, 0.0), Vec3::NEG_Y);
+    let shade = |ao: Option<AoSettings>| {
+        let w = Whitted {
+            ambient_occlusion: ao,
+            ..Whitted::default()
+        };
+        let mut st = stream_of(&sampler, 0);
+        let (col, _) = w.trace_sampled(
+            &world,
+            &ray,
+            0.0,
+            RayKind::Primary,
+            0,
+            1.0,
+            &mut st,
+            &mut Counters::default(),
+            &mut NoObserver,
+        );
+        col.x
+    };
+    let plain = shade(None);
+    assert!(
+        (plain - 0.9).abs() < 1e-5,
+        "ambient 0.4 + Lambert 0.5: {plain}"
+    );
+    let occluded = shade(Some(AoSettings {
+        samples: 4096,
+        distance: f32::INFINITY,
+    }));
+    let want = 0.4 * 0.5 + 0.5;
+    assert!(
+        (occluded - want).abs() < 0.004,
+        "{occluded}, closed form {want}"
+    );
+}
+
 // ---------------------------------------------------------------------------
 // Rendering helpers
 
