@@ -359,3 +359,92 @@ fn counters_count_each_kind_of_ray_in_the_tree() {
     assert_eq!(tree[0], 1);
     assert!(tree.iter().all(|&n| n > 0), "every kind traced: {tree:?}");
 }
+
+/// Glossy reflection and transmission spread their rays over the lobe
+/// `cos^e α` around the mirror / refracted direction, each on its own side
+/// of the surface; an opaque, non-reflective surface spawns no child rays
+/// even with no weight cutoff.
+#[test]
+fn glossy_children_spread_over_their_lobe_on_their_side() {
+    let glossiness = 0.3;
+    let e = 2.0 / (glossiness * glossiness) - 2.0;
+    let glass = Phong {
+        diffuse: Vec3::splat(0.1),
+        reflective: Vec3::splat(0.5),
+        transparent: Vec3::splat(0.5),
+        ior: 1.5,
+        glossiness,
+        ..Phong::default()
+    };
+    let world = World::build(&floor_scene(glass), BuildOptions::default());
+    let w = Whitted {
+        bounces: 1,
+        glossy_samples: 256,
+        weight_cutoff: 0.0,
+        ..Whitted::default()
+    };
+    let dir = Vec3::new(0.1, -1.0, 0.0).normalize();
+    let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 5.0, 0.0), dir));
+    let mut rec = RayRecorder::default();
+    let mut c = Counters::default();
+    w.trace(
+        &world,
+        &eye,
+        0.0,
+        RayKind::Primary,
+        0,
+        1.0,
+        &mut c,
+        &mut rec,
+    );
+    let n = rec.rays[0].normal.expect("the eye ray hits the ball");
+    let mirror = dir - 2.0 * dir.dot(n) * n;
+    let children = |k: RayKind| -> Vec<Vec3> {
+        rec.rays
+            .iter()
+            .filter(|r| r.kind == k && r.depth == 1)
+            .map(|r| r.ray.dir.normalize())
+            .collect()
+    };
+    let (refl, trans) = (children(RayKind::Reflected), children(RayKind::Transmitted));
+    assert_eq!((refl.len(), trans.len()), (256, 256));
+    assert_eq!(c.glossy, 512);
+    assert!(
+        refl.iter().all(|d| d.dot(n) > 0.0),
+        "reflected rays leave outwards"
+    );
+    assert!(
+        trans.iter().all(|d| d.dot(n) < 0.0),
+        "transmitted rays go in"
+    );
+    // Density ∝ cos^e α: E[cos α] = (e + 1) / (e + 2) around the mirror
+    // direction (the lobe lies well inside the hemisphere here).
+    let mean_cos = refl.iter().map(|d| d.dot(mirror)).sum::<f32>() / 256.0;
+    let want = (e + 1.0) / (e + 2.0);
+    assert!(
+        (mean_cos - want).abs() < 0.01,
+        "mean cos {mean_cos}, lobe {want}"
+    );
+    let spread = refl.iter().map(|d| d.dot(mirror)).fold(1.0f32, f32::min);
+    assert!(spread < 0.9, "the lobe is wide: least cos {spread}");
+
+    // Opaque and not reflective: nothing to spawn, even with no cutoff.
+    let matte = Phong {
+        diffuse: Vec3::splat(0.5),
+        ..Phong::default()
+    };
+    let world = World::build(&floor_scene(matte), BuildOptions::default());
+    let mut rec = RayRecorder::default();
+    let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 5.0, 0.0), dir));
+    w.trace(
+        &world,
+        &eye,
+        0.0,
+        RayKind::Primary,
+        0,
+        1.0,
+        &mut Counters::default(),
+        &mut rec,
+    );
+    assert_eq!(rec.rays.len(), 1, "{:?}", rec.rays);
+}
