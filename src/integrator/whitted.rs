@@ -13,7 +13,7 @@
 use super::ao::{unoccluded, AoSettings};
 use super::optics::{reflect, refract};
 use super::{RayKind, RayObserver};
-use crate::light::{incident, is_delta, sample_light};
+use crate::light::{incident, is_delta, sample_light, Incident};
 use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
 use crate::math::{Ray, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
@@ -156,23 +156,7 @@ impl Whitted {
                 continue;
             }
             let inc = incident(light, p);
-            let reflected = phong_light(&m, n, inc.to_light, -d, inc.color);
-            if reflected == Vec3::ZERO {
-                continue; // nothing to shadow: no shadow ray needed
-            }
-            // A light exactly at the point (zero direction) has nothing in
-            // between, and a zero-direction shadow ray would be meaningless.
-            if self.shadows && inc.to_light != Vec3::ZERO {
-                let target = match light {
-                    Light::Point { position, .. } => ShadowTarget::Point(*position),
-                    _ => ShadowTarget::Direction(inc.to_light),
-                };
-                let from = hit.surface_point();
-                color +=
-                    reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
-            } else {
-                color += reflected;
-            }
+            color += self.lit(world, ray, hit, light, &inc, &m, n, d, depth, c, obs);
         }
 
         if depth >= self.bounces {
@@ -292,20 +276,7 @@ impl Whitted {
         let mut sum = Vec3::ZERO;
         for u in stream.split_2d(k) {
             let inc = sample_light(light, p, u);
-            let reflected = phong_light(m, n, inc.to_light, -d, inc.color);
-            if reflected == Vec3::ZERO {
-                continue;
-            }
-            if self.shadows && inc.to_light != Vec3::ZERO {
-                let target = match inc.at {
-                    Some(at) => ShadowTarget::Surface(at),
-                    None => ShadowTarget::Point(p + inc.to_light * inc.distance),
-                };
-                let from = hit.surface_point();
-                sum += reflected * self.light_through(world, from, ray.time, target, depth, c, obs);
-            } else {
-                sum += reflected;
-            }
+            sum += self.lit(world, ray, hit, light, &inc, m, n, d, depth, c, obs);
         }
         sum / k as f32
     }
@@ -323,6 +294,39 @@ impl Whitted {
                 hit.material,
                 world.object_from_world[hit.instance as usize].transform_point3(hit.point),
             ),
+        }
+    }
+
+    /// Phong light reflected towards `-d` from the light arriving as `inc`
+    /// from `light`, times what of it gets through (one shadow ray when
+    /// shadows are on).
+    #[allow(clippy::too_many_arguments)]
+    fn lit(
+        &self,
+        world: &World,
+        ray: &Ray,
+        hit: &Hit,
+        light: &Light,
+        inc: &Incident,
+        m: &crate::scene::Phong,
+        n: Vec3,
+        d: Vec3,
+        depth: u32,
+        c: &mut Counters,
+        obs: &mut impl RayObserver,
+    ) -> Vec3 {
+        let reflected = phong_light(m, n, inc.to_light, -d, inc.color);
+        if reflected == Vec3::ZERO {
+            return reflected; // nothing to shadow: no shadow ray needed
+        }
+        // A light exactly at the point (zero direction) has nothing in
+        // between, and a zero-direction shadow ray would be meaningless.
+        if self.shadows && inc.to_light != Vec3::ZERO {
+            let target = ShadowTarget::of(light, inc);
+            let from = hit.surface_point();
+            reflected * self.light_through(world, from, ray.time, target, depth, c, obs)
+        } else {
+            reflected
         }
     }
 
@@ -382,6 +386,17 @@ enum ShadowTarget {
 }
 
 impl ShadowTarget {
+    /// Where the shadow ray for the light `inc` from `light` goes: the
+    /// sampled point of an area light, a point light's position, or a
+    /// directional light's direction.
+    fn of(light: &Light, inc: &Incident) -> Self {
+        match (inc.at, light) {
+            (Some(at), _) => ShadowTarget::Surface(at),
+            (None, Light::Point { position, .. }) => ShadowTarget::Point(*position),
+            (None, _) => ShadowTarget::Direction(inc.to_light),
+        }
+    }
+
     /// The shadow ray from `from` and the `tmax` it is traced to: a point
     /// light's ray ends at the light (`t = 1`), kept `SHADOW_EPSILON` short
     /// of it so a surface the light sits on does not shadow it; an area
