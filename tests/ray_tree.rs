@@ -448,3 +448,75 @@ fn glossy_children_spread_over_their_lobe_on_their_side() {
     );
     assert_eq!(rec.rays.len(), 1, "{:?}", rec.rays);
 }
+
+/// A glossy mirror under a uniform sky: every lobe ray escapes to the
+/// background, so the colour is exactly reflective × background, for any
+/// number of lobe rays. Between two glossy mirrors only the camera ray's hit
+/// spreads into `glossy_samples` rays; deeper hits take one each, and the
+/// tree stops at `bounces`.
+#[test]
+fn glossy_reflection_averages_its_lobe_and_spreads_only_at_the_first_hit() {
+    let gloss = Phong {
+        reflective: Vec3::splat(0.5),
+        glossiness: 0.4,
+        diffuse: Vec3::ZERO,
+        ..Phong::default()
+    };
+    let mut scene = floor_scene(gloss);
+    scene.lights.clear();
+    scene.background = Background {
+        color: Vec3::splat(0.6),
+        ambient: Vec3::ZERO,
+    };
+    let plane = |normal: Vec3, offset: f32| Node::Shape {
+        shape: Shape::Plane { normal, offset },
+        material: Some(1),
+    };
+    scene.root = Node::Group(vec![plane(Vec3::Y, 0.0)]);
+    let down = Vec3::new(0.3, -1.0, 0.1).normalize();
+    for samples in [1, 5, 16] {
+        let world = World::build(&scene, BuildOptions::default());
+        let w = Whitted {
+            bounces: 3,
+            glossy_samples: samples,
+            ..Whitted::default()
+        };
+        let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 1.0, 0.0), down));
+        let (c, _) = w.trace(
+            &world,
+            &eye,
+            0.0,
+            RayKind::Primary,
+            0,
+            1.0,
+            &mut Counters::default(),
+            &mut NoObserver,
+        );
+        assert!(
+            (c - Vec3::splat(0.3)).abs().max_element() < 1e-6,
+            "{samples} rays: {c}"
+        );
+    }
+
+    scene.root = Node::Group(vec![plane(Vec3::Y, 0.0), plane(Vec3::NEG_Y, -1.0)]);
+    let world = World::build(&scene, BuildOptions::default());
+    let w = Whitted {
+        bounces: 3,
+        glossy_samples: 4,
+        ..Whitted::default()
+    };
+    let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 0.5, 0.0), down));
+    let mut rec = RayRecorder::default();
+    w.trace(
+        &world,
+        &eye,
+        0.0,
+        RayKind::Primary,
+        0,
+        1.0,
+        &mut Counters::default(),
+        &mut rec,
+    );
+    let at = |depth: u32| rec.rays.iter().filter(|r| r.depth == depth).count();
+    assert_eq!([at(0), at(1), at(2), at(3), at(4)], [1, 4, 4, 4, 0]);
+}
