@@ -329,6 +329,59 @@ fn geometry_beyond_a_point_light_casts_no_shadow() {
     };
     let c = floor_under_light(1.0, Vec3::X, vec![shelf, ceiling()], true);
     assert_eq!(c, Vec3::ZERO);
+    // A light set into the ceiling itself: the shadow ray ends just short of
+    // it, so the surface the light lies on does not block it.
+    let c = floor_under_light(3.0, Vec3::X, vec![ceiling()], true);
+    assert!((c.x - lit).abs() < 1e-5, "light on the ceiling: {c}");
+}
+
+/// The same for an area light: shadow rays end at the sampled point of the
+/// light, so neither a ceiling the disk is set into nor one above it
+/// shadows the floor, and the shaded colour equals the one without shadows.
+#[test]
+fn geometry_beyond_an_area_light_casts_no_shadow() {
+    use glint::scene::AreaShape;
+    let shade = |ceiling_y: Option<f32>, shadows: bool| {
+        let mut kids = vec![plane(Vec3::Y, 0.0, 0)];
+        kids.extend(ceiling_y.map(|y| plane(Vec3::NEG_Y, -y, 1)));
+        let s = scene(
+            Node::Group(kids),
+            vec![
+                Phong {
+                    diffuse: Vec3::splat(0.8),
+                    ..Phong::default()
+                },
+                Phong::default(),
+            ],
+            vec![Light::Area {
+                shape: AreaShape::Disk {
+                    center: Vec3::new(0.0, 1.0, 0.0),
+                    normal: Vec3::NEG_Y,
+                    radius: 0.5,
+                },
+                color: Vec3::ONE,
+                power: 10.0,
+            }],
+            dark(),
+        );
+        let world = World::build_world_space(&s, BuildOptions::default());
+        let w = Whitted {
+            shadows,
+            shadow_samples: 16,
+            ..Whitted::default()
+        };
+        let o = Vec3::new(0.0, 0.1, 2.0);
+        trace(&world, &w, Ray::new(o, -o)).0
+    };
+    let open = shade(None, false);
+    assert!(open.x > 0.1, "the disk lights the floor: {open}");
+    for y in [1.0, 2.0] {
+        let c = shade(Some(y), true);
+        assert!(
+            (c - open).abs().max_element() < 1e-6,
+            "ceiling at {y}: {c} vs {open}"
+        );
+    }
 }
 
 /// Point light falloff `1/(a + b·d + c·d²)` times Lambert's cosine, for a
