@@ -8,7 +8,7 @@
 //! add, and the min/max intrinsics keep their SSE semantics), so both copies
 //! return bit-identical results. Elsewhere only the portable copy exists.
 
-use super::node::{Node4, Tri4};
+use super::node::{Node, Tri4};
 use super::traverse::{self, Fallback, RayData};
 use crate::math::Ray;
 use crate::stats::TraversalStats;
@@ -16,7 +16,7 @@ use crate::stats::TraversalStats;
 /// Closest hit (see `traverse::closest`), on the best copy for this CPU.
 #[inline]
 pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node4],
+    nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
     ray: &Ray,
@@ -36,7 +36,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
 /// Any hit (see `traverse::any`), on the best copy for this CPU.
 #[inline]
 pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node4],
+    nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
     ray: &Ray,
@@ -60,7 +60,7 @@ mod avx2 {
 
     #[target_feature(enable = "avx2")]
     pub(super) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node4],
+        nodes: &[Node],
         tris: &[Tri4],
         fallback: &F,
         ray: &Ray,
@@ -73,7 +73,7 @@ mod avx2 {
 
     #[target_feature(enable = "avx2")]
     pub(super) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node4],
+        nodes: &[Node],
         tris: &[Tri4],
         fallback: &F,
         ray: &Ray,

@@ -1,10 +1,11 @@
-//! The fast BVH, glint's default accelerator: 4-wide nodes tested with
-//! 4-lane box tests, leaves of four-triangle blocks (a 4-lane pre-test, then
+//! The fast BVH, glint's default accelerator: 8-wide nodes tested with
+//! 8-lane box tests, leaves of four-triangle blocks (a 4-lane pre-test, then
 //! the shared watertight test on the lanes it could not rule out), binned
 //! SAH built in parallel.
 //!
-//! - `node.rs`: the layout (`Node4`: four boxes in structure-of-arrays form,
-//!   128 bytes; `Tri4`: four triangles' vertices, 160 bytes) and prefetch.
+//! - `node.rs`: the layout (`Node`: eight boxes in structure-of-arrays form,
+//!   256 bytes; `Tri4`: four triangles' vertices, 160 bytes) and prefetch;
+//!   `lanes.rs`: the eight-lane arithmetic of the box test.
 //! - `build.rs`: binned SAH (32 bins, costs counted in blocks of four),
 //!   children built in parallel above 16k items, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
@@ -19,13 +20,15 @@
 //! brute force's hits. Non-triangle primitives (spheres, transformed shapes)
 //! sit in the same leaves and are tested one at a time.
 //!
-//! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere), stable
+//! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere; two of them
+//! for eight lanes), stable
 //! Rust. `unsafe` appears in three places, each with its soundness argument:
 //! the prefetch hint (`node.rs`), `madvise` (`pages.rs`) and the call of the
 //! AVX2 copy after the CPU check (`dispatch.rs`); each has a portable path.
 
 mod build;
 mod dispatch;
+mod lanes;
 mod node;
 mod pages;
 mod traverse;
@@ -38,12 +41,13 @@ use crate::primitive::Primitive;
 use crate::shape::{Shape, Triangle};
 use crate::stats::{Counters, TraversalStats};
 use build::{Item, Source};
-pub(crate) use node::Node4;
+pub(crate) use node::Node;
 use node::Tri4;
 
-/// A 4-wide BVH over triangles (and, through a [`Fallback`], other shapes).
+/// The fast BVH (8-wide nodes; the name predates them) over triangles
+/// (and, through a [`Fallback`], other shapes).
 pub struct Bvh4 {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node>,
     tris: Vec<Tri4>,
     bounds: Aabb,
 }
@@ -245,7 +249,7 @@ mod tests {
         let mut c = Counters::default();
         let h = b.intersect(&prims, &r, 0.0, f32::INFINITY, &mut c).unwrap();
         assert_eq!(h.prim, 0);
-        // Depth is about log4(4096 / 4) = 5; ordered traversal stops right after.
+        // Depth is about log8(4096 / 4) = 4; ordered traversal stops right after.
         assert!(c.nodes_visited <= 12, "{c:?}");
     }
 
