@@ -164,6 +164,24 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
     }
 }
 
+/// Node levels of a built tree (0 when empty): parents precede their
+/// children in `nodes`, so one pass in order finds every node's level.
+pub(crate) fn depth(nodes: &[Node]) -> usize {
+    let mut level = vec![0u8; nodes.len()];
+    let mut deepest = 0;
+    for (i, n) in nodes.iter().enumerate() {
+        let l = level[i].saturating_add(1);
+        deepest = deepest.max(l as usize);
+        for &c in &n.child {
+            if !is_leaf(c) {
+                debug_assert!(c as usize > i);
+                level[c as usize] = l;
+            }
+        }
+    }
+    deepest
+}
+
 /// Bounds of the boxes and of the centroids.
 fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     let one = |r: &[PrimRef]| {

@@ -50,6 +50,8 @@ pub struct Bvh4 {
     nodes: Vec<Node>,
     tris: Vec<Tri4>,
     bounds: Aabb,
+    /// Deeper than `traverse::SHALLOW_DEPTH`: needs the large stack.
+    deep: bool,
 }
 
 /// The world's bounded primitives as a build source.
@@ -131,6 +133,7 @@ impl Bvh4 {
 
     fn from_built(b: build::Built) -> Self {
         Bvh4 {
+            deep: build::depth(&b.nodes) > traverse::SHALLOW_DEPTH,
             nodes: b.nodes,
             tris: b.tris,
             bounds: b.bounds,
@@ -158,7 +161,8 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> Option<(f32, u32)> {
-        dispatch::closest(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
+        let (n, t) = (&self.nodes, &self.tris);
+        dispatch::closest(n, t, fallback, ray, tmin, tmax, stats, self.deep)
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
@@ -171,7 +175,8 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> bool {
-        dispatch::any(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
+        let (n, t) = (&self.nodes, &self.tris);
+        dispatch::any(n, t, fallback, ray, tmin, tmax, stats, self.deep)
     }
 }
 
@@ -251,6 +256,33 @@ mod tests {
         assert_eq!(h.prim, 0);
         // Depth is about log8(4096 / 4) = 4; ordered traversal stops right after.
         assert!(c.nodes_visited <= 12, "{c:?}");
+    }
+
+    #[test]
+    fn both_stack_sizes_agree() {
+        let prims = soup(9, 3000);
+        let b = Bvh4::new(&prims, all(&prims));
+        let d = build::depth(&b.nodes);
+        assert!((2..=traverse::SHALLOW_DEPTH).contains(&d), "{d}");
+        assert!(!b.deep);
+        let deep = Bvh4 { deep: true, ..b };
+        for i in 0..2000 {
+            let f = i as f32;
+            let o = Vec3::new((f * 0.37).sin(), (f * 0.73).cos(), -9.0);
+            let r = Ray::new(
+                o,
+                Vec3::new((f * 0.11).cos() * 0.3, (f * 0.29).sin() * 0.3, 1.0),
+            );
+            let (n, t) = (&deep.nodes, &deep.tris);
+            let ns = &mut crate::stats::NoStats;
+            for deep_stack in [false, true] {
+                let inf = f32::INFINITY;
+                let c = dispatch::closest(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
+                assert_eq!(c, deep.closest(&prims[..], &r, 0.0, inf, ns));
+                let a = dispatch::any(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
+                assert_eq!(a, c.is_some());
+            }
+        }
     }
 
     #[test]

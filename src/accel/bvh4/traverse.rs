@@ -8,10 +8,16 @@ use crate::shape::{intersect_triangle, may_hit4, WatertightRay};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
-/// Entries of the traversal stack: the builder bounds the tree's depth
-/// (`build::MAX_DEPTH`) so that at most `(W − 1) · depth + 1` entries are
+/// Entries of the traversal stack for any tree: the builder bounds the
+/// depth (`build::MAX_DEPTH`) and at most `(W − 1) · depth + 1` entries are
 /// ever pending.
-pub(crate) const STACK: usize = (W - 1) * super::build::MAX_DEPTH + 1;
+pub(crate) const DEEP: usize = (W - 1) * super::build::MAX_DEPTH + 1;
+/// Entries of the stack for trees at most [`SHALLOW_DEPTH`] deep, the usual
+/// case (the deep stack's zeroing, 1 KB per ray, was 6% of a render's
+/// time).
+pub(crate) const SHALLOW: usize = 64;
+/// The deepest tree the [`SHALLOW`] stack serves.
+pub(crate) const SHALLOW_DEPTH: usize = (SHALLOW - 1) / (W - 1);
 
 /// How items that are not triangles are tested (the world's spheres and
 /// transformed shapes); a mesh has none.
@@ -143,13 +149,7 @@ fn prefetch_children(nodes: &[Node], tris: &[Tri4], node: &Node, mut mask: u32) 
 /// nearest, so that the nearest is visited first and the others are popped
 /// in order of distance.
 #[inline(always)]
-fn order(
-    node: &Node,
-    mut mask: u32,
-    dist: Lanes,
-    stack: &mut [(u32, f32); STACK],
-    sp: &mut usize,
-) -> u32 {
+fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: &mut usize) -> u32 {
     let mut kids = [(0u32, 0f32); W];
     let mut k = 0;
     while mask != 0 {
@@ -172,10 +172,11 @@ fn order(
     kids[k - 1].0
 }
 
-/// The closest hit: `(t, item id)`. Always inlined, so that `dispatch`'s
+/// The closest hit: `(t, item id)`, with an `N`-entry stack ([`SHALLOW`]
+/// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
 /// AVX2 copy compiles it with AVX2.
 #[inline(always)]
-pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
+pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
     nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
@@ -191,7 +192,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     let mut best: Option<(f32, u32)> = None;
     let mut tmax = tmax;
     let tmin4 = Lanes::splat(tmin);
-    let mut stack = [(0u32, 0f32); STACK];
+    let mut stack = [(0u32, 0f32); N];
     let mut sp = 0usize;
     let mut cur = 0u32;
     loop {
@@ -257,7 +258,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
 /// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first
 /// hit. Always inlined (see [`closest`]).
 #[inline(always)]
-pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
+pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
     nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
@@ -271,7 +272,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     }
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
     let (tmin4, tmax4) = (Lanes::splat(tmin), Lanes::splat(tmax));
-    let mut stack = [0u32; STACK];
+    let mut stack = [0u32; N];
     let mut sp = 0usize;
     let mut cur = 0u32;
     let hit = 'walk: loop {
