@@ -281,12 +281,40 @@ impl BinMap {
         // saturating f32-to-usize conversion per axis was a tenth of the
         // build's time).
         let k = k.max(Vec3A::ZERO).min(Vec3A::splat((B - 1) as f32));
-        [
-            k.x as i32 as usize,
-            k.y as i32 as usize,
-            k.z as i32 as usize,
-        ]
+        truncate::<B>(k)
     }
+}
+
+/// The integer parts of `k`'s lanes, each in `[0, B − 1]` (so the mask
+/// changes nothing and spares the bins' bounds checks). On x86-64 one SSE2
+/// conversion of the vector (`cvttps2dq`, where `as i32` adds saturation
+/// and NaN checks per lane that the clamp has made useless); elsewhere `as
+/// i32`. Both truncate, so the bins are the same.
+#[inline(always)]
+fn truncate<const B: usize>(k: Vec3A) -> [usize; 3] {
+    const { assert!(B.is_power_of_two()) };
+    #[cfg(target_arch = "x86_64")]
+    let [x, y, z] = {
+        use std::arch::x86_64::{_mm_cvtsi128_si32, _mm_cvttps_epi32, _mm_shuffle_epi32};
+        // SAFETY: these intrinsics need only SSE2, which every x86-64 CPU
+        // has (it is in the x86_64 baseline Rust compiles for, so
+        // `cfg(target_arch = "x86_64")` implies it); they touch no memory.
+        unsafe {
+            let v = _mm_cvttps_epi32(k.into());
+            [
+                _mm_cvtsi128_si32(v),
+                _mm_cvtsi128_si32(_mm_shuffle_epi32::<0b01_01_01_01>(v)),
+                _mm_cvtsi128_si32(_mm_shuffle_epi32::<0b10_10_10_10>(v)),
+            ]
+        }
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let [x, y, z] = [k.x as i32, k.y as i32, k.z as i32];
+    [
+        x as usize & (B - 1),
+        y as usize & (B - 1),
+        z as usize & (B - 1),
+    ]
 }
 
 /// Bins for ranges of fewer than `SMALL_RANGE` items.
