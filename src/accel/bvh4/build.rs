@@ -451,13 +451,14 @@ impl Builder {
             Plan::Bin { axis, pos, bins } => {
                 let map = BinMap::new(&r.cbounds);
                 let (min, scale) = (map.min[axis], map.scale[axis] * bins as f32);
-                // The same arithmetic as `BinMap::bins`, on one axis.
-                let last = (bins - 1) as f32;
+                // The same arithmetic as `BinMap::bins`, on one axis, without
+                // the conversion: for `k ≥ 0` and `pos ≤ bins − 1`,
+                // `trunc(min(k, bins − 1)) < pos` exactly when `k < pos`.
+                let pos_f = pos as f32;
                 partition(refs, |p| {
                     let c = (p.lo[axis] + p.hi[axis]) * 0.5;
-                    // `max` then `min`, NaN giving 0, as in `BinMap::bins`.
-                    let k = ((c - min) * scale).max(0.0).min(last);
-                    (k as i32 as usize) < pos
+                    // NaN gives 0, as in `BinMap::bins`.
+                    ((c - min) * scale).max(0.0) < pos_f
                 })
             }
             Plan::Median { axis } => {
