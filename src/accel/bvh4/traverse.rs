@@ -56,7 +56,10 @@ impl RayData {
     pub fn new(ray: &Ray) -> Self {
         let o = ray.origin;
         let inv = Vec3::ONE / ray.dir;
-        let neg = |a: usize| usize::from(inv[a] < 0.0 || (inv[a] == 0.0 && ray.dir[a] < 0.0));
+        // The sign bit of `1 / d`: set for `d < 0`, for `d = −0` (`−∞`) and
+        // for `d = −∞` (`−0`), as `inv < 0 || (inv == 0 && d < 0)` was; a NaN
+        // direction makes every slab NaN, whichever plane is near.
+        let neg = |a: usize| usize::from(inv[a].is_sign_negative());
         RayData {
             ray: *ray,
             org: [Lanes::splat(o.x), Lanes::splat(o.y), Lanes::splat(o.z)],
@@ -121,11 +124,10 @@ impl RayData {
 /// [`NO_ITEM`] has the flag too).
 #[inline(always)]
 fn triangle_lanes(b: &Tri4) -> u32 {
-    let mut m = 0;
-    for (lane, &id) in b.ids.iter().enumerate() {
-        m |= u32::from(id & OTHER == 0) << lane;
-    }
-    m
+    // Both flags are the id's top bit: the lanes whose id, read as an f32,
+    // has its sign bit clear (one `movmskps`; no arithmetic on the bits).
+    const _: () = assert!(OTHER == 1 << 31 && NO_ITEM & OTHER != 0);
+    !Vec4::from_array(b.ids.map(f32::from_bits)).is_negative_bitmask() & 0xf
 }
 
 /// Starts loading the children in `mask` (nodes or first blocks), so that
