@@ -22,9 +22,10 @@
 //!
 //! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere; two of them
 //! for eight lanes), stable
-//! Rust. `unsafe` appears in three places, each with its soundness argument:
-//! the prefetch hint (`node.rs`), `madvise` (`pages.rs`) and the call of the
-//! AVX2 copy after the CPU check (`dispatch.rs`); each has a portable path.
+//! Rust. `unsafe` appears in four places, each with its soundness argument:
+//! the prefetch hint (`node.rs`), `madvise` (`pages.rs`), the call of the
+//! AVX2 copy after the CPU check (`dispatch.rs`) and the build's SSE2 bin
+//! conversion (`build.rs`); each has a portable path.
 
 mod build;
 mod dispatch;
