@@ -18,7 +18,7 @@ pub enum Split {
 
 /// Which aggregate to build.
 ///
-/// The default is `Bvh4`, the fast 4-wide BVH; the others are kept for
+/// The default is `Bvh4`, the fast 8-wide BVH; the others are kept for
 /// teaching and comparison.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum AccelKind {
@@ -49,7 +49,7 @@ pub enum AccelKind {
     /// A BVH whose inner nodes are the scene's own groups and transforms
     /// (`bvh-hierarchy`); a mesh's triangles are split by the median.
     BvhHierarchy,
-    /// The fast 4-wide BVH (binned SAH, 4-triangle leaf blocks).
+    /// The fast 8-wide BVH (binned SAH, 4-triangle leaf blocks).
     #[default]
     Bvh4,
 }

@@ -10,7 +10,7 @@
 //! | [`bvh`]     | binary BVH (midpoint, median or binned SAH) | stack, nearer child first     |
 //! | [`nested_grid`] | coarse grid, crowded cells hold finer grids | 3DDDA at each level       |
 //! | [`hierarchy`] | BVH of the scene's own groups and transforms | stack, nearest entry first  |
-//! | [`bvh4`]    | 4-wide BVH, 4-triangle leaf blocks (default) | 4 boxes per step, nearest first |
+//! | [`bvh4`]    | 8-wide BVH, 4-triangle leaf blocks (default) | 8 boxes per step, nearest first |
 //!
 //! Three rules every accelerator follows, so that each returns *exactly* the
 //! hit brute force returns:

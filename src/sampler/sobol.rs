@@ -18,9 +18,23 @@ pub fn sobol_dim0(i: u32) -> u32 {
 }
 
 /// Sobol dimension 1 (primitive polynomial `x + 1`): the direction numbers
-/// follow `v_{k+1} = v_k ^ (v_k >> 1)` from `v_0 = 1/2`.
+/// follow `v_{k+1} = v_k ^ (v_k >> 1)` from `v_0 = 1/2`, and the point is
+/// the XOR of `v_k` over the set bits `k` of `i`. That is linear over bits,
+/// so it is the XOR of one table entry per byte of `i` ([`DIM1_BYTES`]):
+/// the same value as the bit-by-bit loop ([`sobol_dim1_bits`]) in four
+/// lookups instead of up to 32 steps (the loop was the largest part of a
+/// 16-spp render's sampling).
 #[inline]
-pub fn sobol_dim1(mut i: u32) -> u32 {
+pub fn sobol_dim1(i: u32) -> u32 {
+    let t = &DIM1_BYTES;
+    t[0][(i & 0xff) as usize]
+        ^ t[1][(i >> 8 & 0xff) as usize]
+        ^ t[2][(i >> 16 & 0xff) as usize]
+        ^ t[3][(i >> 24) as usize]
+}
+
+/// [`sobol_dim1`] bit by bit: the definition, which builds the table.
+const fn sobol_dim1_bits(mut i: u32) -> u32 {
     let mut v = 1u32 << 31;
     let mut r = 0u32;
     while i != 0 {
@@ -32,6 +46,22 @@ pub fn sobol_dim1(mut i: u32) -> u32 {
     }
     r
 }
+
+/// `DIM1_BYTES[k][b]`: [`sobol_dim1_bits`] of byte `b` placed at byte `k`
+/// of the index (4 KB, computed at compile time).
+static DIM1_BYTES: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut k = 0;
+    while k < 4 {
+        let mut b = 0;
+        while b < 256 {
+            t[k][b] = sobol_dim1_bits((b as u32) << (8 * k));
+            b += 1;
+        }
+        k += 1;
+    }
+    t
+};
 
 /// Laine and Karras's hash, improved by Burley: a permutation of `x` in which
 /// each bit depends only on the bits below it. Applied to bit-reversed values
@@ -90,6 +120,16 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn dimension_1_table_is_the_bit_loop() {
+        let mut x = 0x9e37_79b9u32;
+        for i in (0..70_000).chain([u32::MAX, 1 << 31, 0x00ff_ff00]) {
+            x = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            assert_eq!(sobol_dim1(i), sobol_dim1_bits(i));
+            assert_eq!(sobol_dim1(x), sobol_dim1_bits(x));
         }
     }
 

@@ -8,48 +8,63 @@
 //! add, and the min/max intrinsics keep their SSE semantics), so both copies
 //! return bit-identical results. Elsewhere only the portable copy exists.
 
-use super::node::{Node4, Tri4};
-use super::traverse::{self, Fallback, RayData};
+use super::node::{Node, Tri4};
+use super::traverse::{self, Fallback, RayData, DEEP, SHALLOW};
 use crate::math::Ray;
 use crate::stats::TraversalStats;
 
-/// Closest hit (see `traverse::closest`), on the best copy for this CPU.
+/// Closest hit (see `traverse::closest`), on the best copy for this CPU, with
+/// the deep stack when the tree is `deep` (`traverse::SHALLOW_DEPTH`).
+#[allow(clippy::too_many_arguments)]
 #[inline]
 pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node4],
+    nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
     ray: &Ray,
     tmin: f32,
     tmax: f32,
     stats: &mut S,
+    deep: bool,
 ) -> Option<(f32, u32)> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: calling a `#[target_feature(enable = "avx2")]` function is
         // sound exactly when the CPU supports AVX2, checked just above.
-        return unsafe { avx2::closest(nodes, tris, fallback, ray, tmin, tmax, stats) };
+        return unsafe { avx2::closest(nodes, tris, fallback, ray, tmin, tmax, stats, deep) };
     }
-    traverse::closest(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+    let rd = &RayData::new(ray);
+    if deep {
+        traverse::closest::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+    } else {
+        traverse::closest::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+    }
 }
 
 /// Any hit (see `traverse::any`), on the best copy for this CPU.
+#[allow(clippy::too_many_arguments)]
 #[inline]
 pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node4],
+    nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
     ray: &Ray,
     tmin: f32,
     tmax: f32,
     stats: &mut S,
+    deep: bool,
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: as in `closest`: AVX2 is present, checked just above.
-        return unsafe { avx2::any(nodes, tris, fallback, ray, tmin, tmax, stats) };
+        return unsafe { avx2::any(nodes, tris, fallback, ray, tmin, tmax, stats, deep) };
     }
-    traverse::any(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+    let rd = &RayData::new(ray);
+    if deep {
+        traverse::any::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+    } else {
+        traverse::any::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+    }
 }
 
 /// The AVX2 copies: the portable traversal inlined into functions compiled
@@ -58,29 +73,43 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
 mod avx2 {
     use super::*;
 
+    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2")]
     pub(super) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node4],
+        nodes: &[Node],
         tris: &[Tri4],
         fallback: &F,
         ray: &Ray,
         tmin: f32,
         tmax: f32,
         stats: &mut S,
+        deep: bool,
     ) -> Option<(f32, u32)> {
-        traverse::closest(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+        let rd = &RayData::new(ray);
+        if deep {
+            traverse::closest::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        } else {
+            traverse::closest::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        }
     }
 
+    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2")]
     pub(super) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node4],
+        nodes: &[Node],
         tris: &[Tri4],
         fallback: &F,
         ray: &Ray,
         tmin: f32,
         tmax: f32,
         stats: &mut S,
+        deep: bool,
     ) -> bool {
-        traverse::any(nodes, tris, fallback, &RayData::new(ray), tmin, tmax, stats)
+        let rd = &RayData::new(ray);
+        if deep {
+            traverse::any::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        } else {
+            traverse::any::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        }
     }
 }

@@ -1,10 +1,11 @@
-//! The fast BVH, glint's default accelerator: 4-wide nodes tested with
-//! 4-lane box tests, leaves of four-triangle blocks (a 4-lane pre-test, then
+//! The fast BVH, glint's default accelerator: 8-wide nodes tested with
+//! 8-lane box tests, leaves of four-triangle blocks (a 4-lane pre-test, then
 //! the shared watertight test on the lanes it could not rule out), binned
 //! SAH built in parallel.
 //!
-//! - `node.rs`: the layout (`Node4`: four boxes in structure-of-arrays form,
-//!   128 bytes; `Tri4`: four triangles' vertices, 160 bytes) and prefetch.
+//! - `node.rs`: the layout (`Node`: eight boxes in structure-of-arrays form,
+//!   256 bytes; `Tri4`: four triangles' vertices, 160 bytes) and prefetch;
+//!   `lanes.rs`: the eight-lane arithmetic of the box test.
 //! - `build.rs`: binned SAH (32 bins, costs counted in blocks of four),
 //!   children built in parallel above 16k items, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
@@ -19,13 +20,16 @@
 //! brute force's hits. Non-triangle primitives (spheres, transformed shapes)
 //! sit in the same leaves and are tested one at a time.
 //!
-//! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere), stable
-//! Rust. `unsafe` appears in three places, each with its soundness argument:
-//! the prefetch hint (`node.rs`), `madvise` (`pages.rs`) and the call of the
-//! AVX2 copy after the CPU check (`dispatch.rs`); each has a portable path.
+//! The SIMD is glam's `Vec4` (SSE2 on x86-64, scalar elsewhere; two of them
+//! for eight lanes), stable
+//! Rust. `unsafe` appears in four places, each with its soundness argument:
+//! the prefetch hint (`node.rs`), `madvise` (`pages.rs`), the call of the
+//! AVX2 copy after the CPU check (`dispatch.rs`) and the build's SSE2 bin
+//! conversion (`build.rs`); each has a portable path.
 
 mod build;
 mod dispatch;
+mod lanes;
 mod node;
 mod pages;
 mod traverse;
@@ -38,14 +42,17 @@ use crate::primitive::Primitive;
 use crate::shape::{Shape, Triangle};
 use crate::stats::{Counters, TraversalStats};
 use build::{Item, Source};
-pub(crate) use node::Node4;
+pub(crate) use node::Node;
 use node::Tri4;
 
-/// A 4-wide BVH over triangles (and, through a [`Fallback`], other shapes).
+/// The fast BVH (8-wide nodes; the name predates them) over triangles
+/// (and, through a [`Fallback`], other shapes).
 pub struct Bvh4 {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node>,
     tris: Vec<Tri4>,
     bounds: Aabb,
+    /// Deeper than `traverse::SHALLOW_DEPTH`: needs the large stack.
+    deep: bool,
 }
 
 /// The world's bounded primitives as a build source.
@@ -127,6 +134,7 @@ impl Bvh4 {
 
     fn from_built(b: build::Built) -> Self {
         Bvh4 {
+            deep: build::depth(&b.nodes) > traverse::SHALLOW_DEPTH,
             nodes: b.nodes,
             tris: b.tris,
             bounds: b.bounds,
@@ -154,7 +162,8 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> Option<(f32, u32)> {
-        dispatch::closest(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
+        let (n, t) = (&self.nodes, &self.tris);
+        dispatch::closest(n, t, fallback, ray, tmin, tmax, stats, self.deep)
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
@@ -167,7 +176,8 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> bool {
-        dispatch::any(&self.nodes, &self.tris, fallback, ray, tmin, tmax, stats)
+        let (n, t) = (&self.nodes, &self.tris);
+        dispatch::any(n, t, fallback, ray, tmin, tmax, stats, self.deep)
     }
 }
 
@@ -245,8 +255,35 @@ mod tests {
         let mut c = Counters::default();
         let h = b.intersect(&prims, &r, 0.0, f32::INFINITY, &mut c).unwrap();
         assert_eq!(h.prim, 0);
-        // Depth is about log4(4096 / 4) = 5; ordered traversal stops right after.
+        // Depth is about log8(4096 / 4) = 4; ordered traversal stops right after.
         assert!(c.nodes_visited <= 12, "{c:?}");
+    }
+
+    #[test]
+    fn both_stack_sizes_agree() {
+        let prims = soup(9, 3000);
+        let b = Bvh4::new(&prims, all(&prims));
+        let d = build::depth(&b.nodes);
+        assert!((2..=traverse::SHALLOW_DEPTH).contains(&d), "{d}");
+        assert!(!b.deep);
+        let deep = Bvh4 { deep: true, ..b };
+        for i in 0..2000 {
+            let f = i as f32;
+            let o = Vec3::new((f * 0.37).sin(), (f * 0.73).cos(), -9.0);
+            let r = Ray::new(
+                o,
+                Vec3::new((f * 0.11).cos() * 0.3, (f * 0.29).sin() * 0.3, 1.0),
+            );
+            let (n, t) = (&deep.nodes, &deep.tris);
+            let ns = &mut crate::stats::NoStats;
+            for deep_stack in [false, true] {
+                let inf = f32::INFINITY;
+                let c = dispatch::closest(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
+                assert_eq!(c, deep.closest(&prims[..], &r, 0.0, inf, ns));
+                let a = dispatch::any(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
+                assert_eq!(a, c.is_some());
+            }
+        }
     }
 
     #[test]

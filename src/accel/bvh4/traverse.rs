@@ -1,15 +1,23 @@
-//! Closest-hit and any-hit traversal: per-ray constants computed once, four
+//! Closest-hit and any-hit traversal: per-ray constants computed once, eight
 //! boxes per node step, nearest child first, blocks of four triangles per leaf.
 
-use super::node::{is_leaf, leaf_range, prefetch, Node4, Tri4, EMPTY, NO_ITEM, OTHER};
+use super::lanes::{Lanes, W};
+use super::node::{is_leaf, leaf_range, prefetch, Node, Tri4, EMPTY, NO_ITEM, OTHER};
 use crate::math::{Ray, Vec3};
 use crate::shape::{intersect_triangle, may_hit4, WatertightRay};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
-/// Entries of the traversal stack: the builder bounds the tree's depth so
-/// that at most `3 · depth + 1` entries are ever pending (see `build.rs`).
-pub(crate) const STACK: usize = 64;
+/// Entries of the traversal stack for any tree: the builder bounds the
+/// depth (`build::MAX_DEPTH`) and at most `(W − 1) · depth + 1` entries are
+/// ever pending.
+pub(crate) const DEEP: usize = (W - 1) * super::build::MAX_DEPTH + 1;
+/// Entries of the stack for trees at most [`SHALLOW_DEPTH`] deep, the usual
+/// case (the deep stack's zeroing, 1 KB per ray, was 6% of a render's
+/// time).
+pub(crate) const SHALLOW: usize = 64;
+/// The deepest tree the [`SHALLOW`] stack serves.
+pub(crate) const SHALLOW_DEPTH: usize = (SHALLOW - 1) / (W - 1);
 
 /// How items that are not triangles are tested (the world's spheres and
 /// transformed shapes); a mesh has none.
@@ -32,10 +40,10 @@ impl Fallback for TrianglesOnly {
 pub(crate) struct RayData {
     pub ray: Ray,
     /// Origin, splatted per axis.
-    org: [Vec4; 3],
+    org: [Lanes; 3],
     /// `1 / dir` per axis (±inf for a zero component), splatted.
-    inv: [Vec4; 3],
-    /// Index into `Node4::planes` of the near and far plane per axis (the
+    inv: [Lanes; 3],
+    /// Index into `Node::planes` of the near and far plane per axis (the
     /// ray's octant).
     near: [usize; 3],
     far: [usize; 3],
@@ -48,37 +56,44 @@ impl RayData {
     pub fn new(ray: &Ray) -> Self {
         let o = ray.origin;
         let inv = Vec3::ONE / ray.dir;
-        let neg = |a: usize| usize::from(inv[a] < 0.0 || (inv[a] == 0.0 && ray.dir[a] < 0.0));
+        // The sign bit of `1 / d`: set for `d < 0`, for `d = −0` (`−∞`) and
+        // for `d = −∞` (`−0`), as `inv < 0 || (inv == 0 && d < 0)` was; a NaN
+        // direction makes every slab NaN, whichever plane is near.
+        let neg = |a: usize| usize::from(inv[a].is_sign_negative());
         RayData {
             ray: *ray,
-            org: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
-            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            org: [Lanes::splat(o.x), Lanes::splat(o.y), Lanes::splat(o.z)],
+            inv: [
+                Lanes::splat(inv.x),
+                Lanes::splat(inv.y),
+                Lanes::splat(inv.z),
+            ],
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
             wt: WatertightRay::new(ray),
         }
     }
 
-    /// The slab test against a node's four boxes: a bit mask of the boxes
+    /// The slab test against a node's eight boxes: a bit mask of the boxes
     /// the ray meets within `[tmin, tmax]`, and their entry distances.
     ///
     /// A NaN slab distance (`0 · inf`: an origin exactly on a plane of a box
     /// the ray runs parallel to) must not reject the box: `max`/`min` are
-    /// written with the accumulator second, and glam's SSE `max`/`min`
-    /// return their second operand when either is NaN, so such a slab is
+    /// written with the accumulator second, and `Lanes::max`/`min` return
+    /// their second operand when either is NaN, so such a slab is
     /// ignored (the box is kept: conservative, never a missed hit).
     #[inline(always)]
-    fn boxes(&self, n: &Node4, tmin: Vec4, tmax: Vec4) -> (u32, Vec4) {
+    fn boxes(&self, n: &Node, tmin: Lanes, tmax: Lanes) -> (u32, Lanes) {
         let p = &n.planes;
-        let tnx = (p[self.near[0]] - self.org[0]) * self.inv[0];
-        let tny = (p[self.near[1]] - self.org[1]) * self.inv[1];
-        let tnz = (p[self.near[2]] - self.org[2]) * self.inv[2];
-        let tfx = (p[self.far[0]] - self.org[0]) * self.inv[0];
-        let tfy = (p[self.far[1]] - self.org[1]) * self.inv[1];
-        let tfz = (p[self.far[2]] - self.org[2]) * self.inv[2];
+        let tnx = p[self.near[0]].sub_mul(self.org[0], self.inv[0]);
+        let tny = p[self.near[1]].sub_mul(self.org[1], self.inv[1]);
+        let tnz = p[self.near[2]].sub_mul(self.org[2], self.inv[2]);
+        let tfx = p[self.far[0]].sub_mul(self.org[0], self.inv[0]);
+        let tfy = p[self.far[1]].sub_mul(self.org[1], self.inv[1]);
+        let tfz = p[self.far[2]].sub_mul(self.org[2], self.inv[2]);
         let tn = tnx.max(tny.max(tnz.max(tmin)));
         let tf = tfx.min(tfy.min(tfz.min(tmax)));
-        (tn.cmple(tf).bitmask(), tn)
+        (tn.le_mask(tf), tn)
     }
 
     /// The watertight test (`shape::triangle::intersect_triangle`) on the
@@ -109,17 +124,16 @@ impl RayData {
 /// [`NO_ITEM`] has the flag too).
 #[inline(always)]
 fn triangle_lanes(b: &Tri4) -> u32 {
-    let mut m = 0;
-    for (lane, &id) in b.ids.iter().enumerate() {
-        m |= u32::from(id & OTHER == 0) << lane;
-    }
-    m
+    // Both flags are the id's top bit: the lanes whose id, read as an f32,
+    // has its sign bit clear (one `movmskps`; no arithmetic on the bits).
+    const _: () = assert!(OTHER == 1 << 31 && NO_ITEM & OTHER != 0);
+    !Vec4::from_array(b.ids.map(f32::from_bits)).is_negative_bitmask() & 0xf
 }
 
 /// Starts loading the children in `mask` (nodes or first blocks), so that
 /// the nearest one's load and the others' overlap.
 #[inline(always)]
-fn prefetch_children(nodes: &[Node4], tris: &[Tri4], node: &Node4, mut mask: u32) {
+fn prefetch_children(nodes: &[Node], tris: &[Tri4], node: &Node, mut mask: u32) {
     while mask != 0 {
         let c = node.child[mask.trailing_zeros() as usize];
         mask &= mask - 1;
@@ -137,14 +151,8 @@ fn prefetch_children(nodes: &[Node4], tris: &[Tri4], node: &Node4, mut mask: u32
 /// nearest, so that the nearest is visited first and the others are popped
 /// in order of distance.
 #[inline(always)]
-fn order(
-    node: &Node4,
-    mut mask: u32,
-    dist: Vec4,
-    stack: &mut [(u32, f32); STACK],
-    sp: &mut usize,
-) -> u32 {
-    let mut kids = [(0u32, 0f32); 4];
+fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: &mut usize) -> u32 {
+    let mut kids = [(0u32, 0f32); W];
     let mut k = 0;
     while mask != 0 {
         let i = mask.trailing_zeros() as usize;
@@ -166,11 +174,12 @@ fn order(
     kids[k - 1].0
 }
 
-/// The closest hit: `(t, item id)`. Always inlined, so that `dispatch`'s
+/// The closest hit: `(t, item id)`, with an `N`-entry stack ([`SHALLOW`]
+/// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
 /// AVX2 copy compiles it with AVX2.
 #[inline(always)]
-pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node4],
+pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
+    nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
     rd: &RayData,
@@ -184,8 +193,8 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
     let mut best: Option<(f32, u32)> = None;
     let mut tmax = tmax;
-    let tmin4 = Vec4::splat(tmin);
-    let mut stack = [(0u32, 0f32); STACK];
+    let tmin4 = Lanes::splat(tmin);
+    let mut stack = [(0u32, 0f32); N];
     let mut sp = 0usize;
     let mut cur = 0u32;
     loop {
@@ -194,7 +203,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
             if S::ENABLED {
                 n_nodes += 1;
             }
-            let (mask, dist) = rd.boxes(node, tmin4, Vec4::splat(tmax));
+            let (mask, dist) = rd.boxes(node, tmin4, Lanes::splat(tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
@@ -251,8 +260,8 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
 /// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first
 /// hit. Always inlined (see [`closest`]).
 #[inline(always)]
-pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node4],
+pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
+    nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
     rd: &RayData,
@@ -264,8 +273,8 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
         return false;
     }
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
-    let (tmin4, tmax4) = (Vec4::splat(tmin), Vec4::splat(tmax));
-    let mut stack = [0u32; STACK];
+    let (tmin4, tmax4) = (Lanes::splat(tmin), Lanes::splat(tmax));
+    let mut stack = [0u32; N];
     let mut sp = 0usize;
     let mut cur = 0u32;
     let hit = 'walk: loop {

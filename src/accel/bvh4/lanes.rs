@@ -1,0 +1,100 @@
+//! Eight f32 lanes for the 8-wide node test, as two glam `Vec4`s: two SSE
+//! operations each on the x86-64 baseline (VEX-encoded in `dispatch.rs`'s
+//! AVX2 copy), scalar elsewhere. No `unsafe`, no `std::arch`: stable,
+//! portable Rust. (Plain `[f32; 8]` loops left to LLVM's vectoriser came
+//! out as a mix of 4- and 8-lane operations with shuffles to build the
+//! mask, and ran slower than the 4-wide tree.)
+//!
+//! `min` and `max` are glam's SSE `minps`/`maxps`, which return the second
+//! operand when either is NaN: the semantics `traverse.rs`'s slab test
+//! relies on.
+
+use glam::Vec4;
+
+/// Lanes per node.
+pub(crate) const W: usize = 8;
+
+/// Eight f32 lanes: lanes 0–3 in `.0[0]`, 4–7 in `.0[1]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub(crate) struct Lanes(pub [Vec4; 2]);
+
+impl Lanes {
+    pub const INFINITY: Lanes = Lanes([Vec4::INFINITY; 2]);
+    pub const NEG_INFINITY: Lanes = Lanes([Vec4::NEG_INFINITY; 2]);
+
+    #[inline(always)]
+    pub fn splat(x: f32) -> Lanes {
+        Lanes([Vec4::splat(x); 2])
+    }
+
+    /// `(self − o) · m`: the slab distance of one plane per lane.
+    #[inline(always)]
+    pub fn sub_mul(self, o: Lanes, m: Lanes) -> Lanes {
+        Lanes([(self.0[0] - o.0[0]) * m.0[0], (self.0[1] - o.0[1]) * m.0[1]])
+    }
+
+    /// Lane-wise `maxps(self, o)`: `o` when either is NaN.
+    #[inline(always)]
+    pub fn max(self, o: Lanes) -> Lanes {
+        Lanes([self.0[0].max(o.0[0]), self.0[1].max(o.0[1])])
+    }
+
+    /// Lane-wise `minps(self, o)`: `o` when either is NaN.
+    #[inline(always)]
+    pub fn min(self, o: Lanes) -> Lanes {
+        Lanes([self.0[0].min(o.0[0]), self.0[1].min(o.0[1])])
+    }
+
+    /// Bit `i` set where `self[i] <= o[i]`.
+    #[inline(always)]
+    pub fn le_mask(self, o: Lanes) -> u32 {
+        self.0[0].cmple(o.0[0]).bitmask() | self.0[1].cmple(o.0[1]).bitmask() << 4
+    }
+}
+
+impl std::ops::Index<usize> for Lanes {
+    type Output = f32;
+    #[inline(always)]
+    fn index(&self, i: usize) -> &f32 {
+        &self.0[i / 4][i % 4]
+    }
+}
+
+impl std::ops::IndexMut<usize> for Lanes {
+    #[inline(always)]
+    fn index_mut(&mut self, i: usize) -> &mut f32 {
+        &mut self.0[i / 4][i % 4]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lanes(x: [f32; 8]) -> Lanes {
+        let mut l = Lanes::splat(0.0);
+        for (i, x) in x.into_iter().enumerate() {
+            l[i] = x;
+        }
+        l
+    }
+
+    #[test]
+    fn nan_gives_the_second_operand() {
+        let a = lanes([f32::NAN, 1.0, 2.0, f32::NAN, 0.0, 5.0, -1.0, 3.0]);
+        let b = lanes([4.0, f32::NAN, 1.0, 2.0, 1.0, 6.0, -2.0, 3.0]);
+        let mx = a.max(b);
+        let mn = a.min(b);
+        assert_eq!(mx[0], 4.0);
+        assert!(mx[1].is_nan());
+        assert_eq!(
+            (mx[2], mx[3], mx[4], mx[5], mx[6]),
+            (2.0, 2.0, 1.0, 6.0, -1.0)
+        );
+        assert_eq!(mn[0], 4.0);
+        assert!(mn[1].is_nan());
+        assert_eq!((mn[2], mn[4], mn[5], mn[6]), (1.0, 0.0, 5.0, -2.0));
+        assert_eq!(a.le_mask(b), 0b1011_0000);
+    }
+}
