@@ -66,6 +66,29 @@ mod tests {
     }
 
     #[test]
+    fn lobe_is_symmetric_around_its_axis() {
+        // Uniform azimuth: the mean direction lies along the axis, its
+        // length the mean cosine, for an axis in no special position.
+        let axis = Vec3::new(0.3, -0.5, 0.8).normalize();
+        for e in [1.0f32, 10.0] {
+            let k = 64;
+            let mut sum = Vec3::ZERO;
+            for i in 0..k {
+                for j in 0..k {
+                    let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                    sum += sample_lobe(axis, axis, e, u);
+                }
+            }
+            let mean = sum / (k * k) as f32;
+            let across = (mean - mean.dot(axis) * axis).length();
+            assert!(
+                across < 1e-3,
+                "{e}: mean {mean} leans {across} off the axis"
+            );
+        }
+    }
+
+    #[test]
     fn directions_stay_on_the_requested_side() {
         let n = Vec3::Y;
         let axis = Vec3::new(1.0, 0.05, 0.0).normalize(); // grazing
