@@ -89,14 +89,35 @@ mod tests {
     }
 
     #[test]
+    fn lobe_centres_on_its_axis_when_the_side_differs() {
+        // A mirror direction 45° from the normal: the lobe's mean lies along
+        // the axis (few rays cross the surface to be mirrored back).
+        let n = Vec3::Y;
+        let axis = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let k = 64;
+        let mut sum = Vec3::ZERO;
+        for i in 0..k {
+            for j in 0..k {
+                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                sum += sample_lobe(axis, n, 20.0, u);
+            }
+        }
+        let mean = (sum / (k * k) as f32).normalize();
+        assert!(mean.dot(axis) > 0.999, "mean direction {mean}");
+    }
+
+    #[test]
     fn directions_stay_on_the_requested_side() {
         let n = Vec3::Y;
         let axis = Vec3::new(1.0, 0.05, 0.0).normalize(); // grazing
         for i in 0..32 {
             for j in 0..32 {
                 let u = Vec2::new(i as f32 / 32.0, j as f32 / 32.0);
-                assert!(sample_lobe(axis, n, 5.0, u).dot(n) >= 0.0);
-                assert!(sample_lobe(axis, -n, 5.0, u).dot(n) <= 0.0);
+                let (up, down) = (sample_lobe(axis, n, 5.0, u), sample_lobe(axis, -n, 5.0, u));
+                assert!(up.dot(n) >= 0.0 && down.dot(n) <= 0.0);
+                // A mirrored direction is still a unit vector.
+                assert!((up.length() - 1.0).abs() < 1e-5, "{up}");
+                assert!((down.length() - 1.0).abs() < 1e-5, "{down}");
             }
         }
     }
