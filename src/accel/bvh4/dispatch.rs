@@ -7,9 +7,11 @@
 //! IEEE operations in the same order (Rust never fuses a multiply and an
 //! add, and the min/max intrinsics keep their SSE semantics), so both copies
 //! return bit-identical results. Elsewhere only the portable copy exists.
+//! The AVX2 copy also tests a node's eight boxes with 256-bit operations
+//! (`traverse::RayData::boxes_avx`, given an `Avx` token made only here).
 
 use super::node::{Node, Tri4};
-use super::traverse::{self, Fallback, RayData, DEEP, SHALLOW};
+use super::traverse::{self, Fallback, Portable, RayData, DEEP, SHALLOW};
 use crate::math::Ray;
 use crate::stats::TraversalStats;
 
@@ -35,9 +37,11 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     }
     let rd = &RayData::new(ray);
     if deep {
-        traverse::closest::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::closest::<S, F, _, DEEP>(Portable, nodes, tris, fallback, rd, tmin, tmax, stats)
     } else {
-        traverse::closest::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::closest::<S, F, _, SHALLOW>(
+            Portable, nodes, tris, fallback, rd, tmin, tmax, stats,
+        )
     }
 }
 
@@ -61,9 +65,9 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     }
     let rd = &RayData::new(ray);
     if deep {
-        traverse::any::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::any::<S, F, _, DEEP>(Portable, nodes, tris, fallback, rd, tmin, tmax, stats)
     } else {
-        traverse::any::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::any::<S, F, _, SHALLOW>(Portable, nodes, tris, fallback, rd, tmin, tmax, stats)
     }
 }
 
@@ -72,6 +76,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::*;
+    use crate::accel::bvh4::traverse::Avx;
 
     #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2")]
@@ -85,11 +90,14 @@ mod avx2 {
         stats: &mut S,
         deep: bool,
     ) -> Option<(f32, u32)> {
+        // SAFETY: these functions are called only after
+        // `is_x86_feature_detected!("avx2")` (`Avx::new`'s contract).
+        let avx = unsafe { Avx::new() };
         let rd = &RayData::new(ray);
         if deep {
-            traverse::closest::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+            traverse::closest::<S, F, _, DEEP>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
         } else {
-            traverse::closest::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+            traverse::closest::<S, F, _, SHALLOW>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
         }
     }
 
@@ -105,11 +113,14 @@ mod avx2 {
         stats: &mut S,
         deep: bool,
     ) -> bool {
+        // SAFETY: these functions are called only after
+        // `is_x86_feature_detected!("avx2")` (`Avx::new`'s contract).
+        let avx = unsafe { Avx::new() };
         let rd = &RayData::new(ray);
         if deep {
-            traverse::any::<S, F, DEEP>(nodes, tris, fallback, rd, tmin, tmax, stats)
+            traverse::any::<S, F, _, DEEP>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
         } else {
-            traverse::any::<S, F, SHALLOW>(nodes, tris, fallback, rd, tmin, tmax, stats)
+            traverse::any::<S, F, _, SHALLOW>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
         }
     }
 }

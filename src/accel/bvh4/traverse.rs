@@ -83,7 +83,13 @@ impl RayData {
     /// their second operand when either is NaN, so such a slab is
     /// ignored (the box is kept: conservative, never a missed hit).
     #[inline(always)]
-    fn boxes(&self, n: &Node, tmin: Lanes, tmax: Lanes) -> (u32, Lanes) {
+    fn boxes<B: BoxTest>(&self, bt: B, n: &Node, tmin: Lanes, tmax: Lanes) -> (u32, Lanes) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = bt.avx() {
+            return self.boxes_avx(avx, n, tmin, tmax);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = bt;
         let p = &n.planes;
         let tnx = p[self.near[0]].sub_mul(self.org[0], self.inv[0]);
         let tny = p[self.near[1]].sub_mul(self.org[1], self.inv[1]);
@@ -94,6 +100,46 @@ impl RayData {
         let tn = tnx.max(tny.max(tnz.max(tmin)));
         let tf = tfx.min(tfy.min(tfz.min(tmax)));
         (tn.le_mask(tf), tn)
+    }
+
+    /// [`boxes`](Self::boxes) with 256-bit AVX operations: the same IEEE
+    /// operations on the same operands in the same order (`vsubps`,
+    /// `vmulps`, `vmaxps`/`vminps` with the accumulator second, whose NaN
+    /// rule is `maxps`'s, and an ordered `<=` compare), so the mask and the
+    /// distances are bit-identical to the portable test.
+    ///
+    /// Deliberately no `#[target_feature]`: a function with one cannot be
+    /// `#[inline(always)]`, and LLVM kept it out of line (a call per node).
+    /// Without it, this body is inlined into `dispatch`'s AVX2 copy, and the
+    /// `_mm256_*` intrinsics then inline into that AVX2 function.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn boxes_avx(&self, _: Avx, n: &Node, tmin: Lanes, tmax: Lanes) -> (u32, Lanes) {
+        use std::arch::x86_64::*;
+        // SAFETY: an `Avx` value exists only where AVX2 (hence AVX) was
+        // detected at run time (`Avx::new` is `unsafe` with that contract,
+        // and its callers check `is_x86_feature_detected!` first), so the AVX
+        // intrinsics run on a CPU that has them. `Lanes` is `repr(C)` of two
+        // `Vec4`s: eight contiguous f32s (32 bytes), so the unaligned loads
+        // read exactly one `Lanes` each, in bounds, and the transmute back
+        // is between two 32-byte plain-float types.
+        unsafe {
+            let ld = |l: &Lanes| _mm256_loadu_ps(l as *const Lanes as *const f32);
+            let p = &n.planes;
+            let (o, i) = (&self.org, &self.inv);
+            let t =
+                |k: usize, a: usize| _mm256_mul_ps(_mm256_sub_ps(ld(&p[k]), ld(&o[a])), ld(&i[a]));
+            let tnx = t(self.near[0], 0);
+            let tny = t(self.near[1], 1);
+            let tnz = t(self.near[2], 2);
+            let tfx = t(self.far[0], 0);
+            let tfy = t(self.far[1], 1);
+            let tfz = t(self.far[2], 2);
+            let tn = _mm256_max_ps(tnx, _mm256_max_ps(tny, _mm256_max_ps(tnz, ld(&tmin))));
+            let tf = _mm256_min_ps(tfx, _mm256_min_ps(tfy, _mm256_min_ps(tfz, ld(&tmax))));
+            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(tn, tf)) as u32;
+            (mask, std::mem::transmute::<__m256, Lanes>(tn))
+        }
     }
 
     /// The watertight test (`shape::triangle::intersect_triangle`) on the
@@ -117,6 +163,51 @@ impl RayData {
             }
         }
         (mask, t)
+    }
+}
+
+/// Which box test the traversal uses: [`Portable`] (glam `Vec4` pairs) or,
+/// on x86-64, [`Avx`] (one 256-bit operation per step). A value, so that
+/// the AVX test needs a token only a run-time check can make.
+pub(crate) trait BoxTest: Copy {
+    /// The proof that AVX is available, for the AVX test.
+    #[cfg(target_arch = "x86_64")]
+    fn avx(self) -> Option<Avx>;
+}
+
+/// The portable box test.
+#[derive(Clone, Copy)]
+pub(crate) struct Portable;
+
+impl BoxTest for Portable {
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx(self) -> Option<Avx> {
+        None
+    }
+}
+
+/// The AVX box test, and the proof that the CPU has AVX2 (so AVX): made
+/// only by the `unsafe` [`Avx::new`].
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(crate) struct Avx(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx {
+    /// # Safety
+    /// The CPU must support AVX2 (`is_x86_feature_detected!("avx2")`).
+    #[inline(always)]
+    pub(crate) unsafe fn new() -> Avx {
+        Avx(())
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl BoxTest for Avx {
+    #[inline(always)]
+    fn avx(self) -> Option<Avx> {
+        Some(self)
     }
 }
 
@@ -177,8 +268,10 @@ fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: 
 /// The closest hit: `(t, item id)`, with an `N`-entry stack ([`SHALLOW`]
 /// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
 /// AVX2 copy compiles it with AVX2.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
+pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+    bt: B,
     nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
@@ -203,7 +296,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
             if S::ENABLED {
                 n_nodes += 1;
             }
-            let (mask, dist) = rd.boxes(node, tmin4, Lanes::splat(tmax));
+            let (mask, dist) = rd.boxes(bt, node, tmin4, Lanes::splat(tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
@@ -259,8 +352,10 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
 
 /// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first
 /// hit. Always inlined (see [`closest`]).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
+pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+    bt: B,
     nodes: &[Node],
     tris: &[Tri4],
     fallback: &F,
@@ -285,7 +380,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
             }
             // No ordering: any occluder ends the walk, and sorting costs
             // more than it saves for shadow rays.
-            let (mut mask, _) = rd.boxes(node, tmin4, tmax4);
+            let (mut mask, _) = rd.boxes(bt, node, tmin4, tmax4);
             if mask != 0 {
                 if mask & (mask - 1) != 0 {
                     prefetch_children(nodes, tris, node, mask);
@@ -330,4 +425,44 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, const N: usize>(
     };
     stats.add(n_nodes, n_tests);
     hit
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+
+    /// The AVX box test gives the portable test's masks and distances bit
+    /// for bit, NaN slabs (origin on a plane, direction parallel) included.
+    #[test]
+    fn avx_boxes_match_portable() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        // SAFETY: AVX2 detected just above.
+        let avx = unsafe { Avx::new() };
+        let mut seed = 0x9e37_79b9_u32;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed % 9) as f32 - 4.0
+        };
+        for _ in 0..20_000 {
+            let mut node = Node::EMPTY;
+            for i in 0..W - (rnd() > 2.0) as usize {
+                let lo = Vec3::new(rnd(), rnd(), rnd());
+                let hi = lo + Vec3::new(rnd().abs(), rnd().abs(), rnd().abs());
+                node.set(i, 0, lo, hi);
+            }
+            let dir = Vec3::new(rnd() * 0.5, rnd() * 0.5, rnd() * 0.5);
+            let rd = RayData::new(&Ray::new(Vec3::new(rnd(), rnd(), rnd()), dir));
+            let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(rnd().abs() + 1.0));
+            let (pm, pd) = rd.boxes(Portable, &node, tmin, tmax);
+            let (am, ad) = rd.boxes(avx, &node, tmin, tmax);
+            assert_eq!(pm, am);
+            for i in 0..W {
+                assert_eq!(pd[i].to_bits(), ad[i].to_bits(), "{dir:?} lane {i}");
+            }
+        }
+    }
 }
