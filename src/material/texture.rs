@@ -233,6 +233,19 @@ mod tests {
     }
 
     #[test]
+    fn wood_adds_the_scaled_noise_to_the_ring_phase() {
+        // The documented formula sin(frequency·r + amplitude·N(p)), with the
+        // noise's sign as written: flipping it gives another plausible wood,
+        // so only the formula itself can tell.
+        for p in points(200, 3.0) {
+            let q = p.as_dvec3();
+            let r = (q.x * q.x + q.z * q.z).sqrt();
+            let want = (7.0 * r + 2.0 * octave_sum(q, 3)).sin();
+            assert!((wood(q, 3, 7.0, 2.0) - want).abs() < 1e-12, "{p}");
+        }
+    }
+
+    #[test]
     fn wood_noise_perturbs_but_keeps_the_rings() {
         // With octaves the rings wobble: values change, but moving straight
         // along the axis by the noise period (256) gives the same value back.
