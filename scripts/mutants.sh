@@ -20,7 +20,8 @@ if [ $# -eq 0 ]; then
   set -- integrator material light shape render accel
 fi
 
-# The fast selection: every test binary that checks the renderer's results
+# The fast selection: the unit tests and the integration-test modules that
+# check the renderer's results
 # (unit tests, closed forms, reference images, analytic and convergence
 # tests, views, pieces), without the ones about input handling and process
 # behaviour (cli, hostile, malformed, formats, fuzz corpus, grammar) and
@@ -30,24 +31,21 @@ fi
 # force) and, outside render/, every assignment 7 line (25 s; it checks the
 # samplers, filters and views, all in render/). Accelerators and shapes add
 # the brute-force agreement and watertightness tests.
-tests_for() {
-  local common="--lib --test physics --test ray_tree --test raytree --test reference_images
-    --test textures --test distribution --test sampling --test sampling_reference --test numerics --test reintersect
-    --test moved_scenes --test viz_cost --test viz_grid --test viz_traversal --test pieces
-    --test animation"
-  case "$1" in
-    accel*|*/accel/*|shape*|*/shape/*)
-      echo "$common --test accel_agree --test accel_edges --test watertight" ;;
-    *) echo "$common" ;;
-  esac
-}
-# The render loop, film, filters and the course's sample/filter views are
-# what assignment 7's lines check: render mutants keep that test.
+common='physics|ray_tree|raytree|reference_images|textures|distribution|sampling|sampling_reference|numerics|reintersect|moved_scenes|viz_cost|viz_grid|viz_traversal|pieces|animation'
+# One nextest filterset: the unit tests plus the selected modules of the
+# integration-test binary `suite` (tests/main.rs).
 filter_for() {
+  local mods=$common slow='test(=reference_images::assignment6_with_every_accelerator)'
   case "$1" in
-    render*|*/render/*) echo 'not test(=assignment6_with_every_accelerator)' ;;
-    *) echo 'not (test(=assignment6_with_every_accelerator) | test(=assignment7_every_line_runs_and_matches))' ;;
+    accel*|*/accel/*|shape*|*/shape/*) mods="$mods|accel_agree|accel_edges|watertight" ;;
   esac
+  # The render loop, film, filters and the course's sample/filter views are
+  # what assignment 7's lines check: render mutants keep that test.
+  case "$1" in
+    render*|*/render/*) ;;
+    *) slow="$slow | test(=sampling_reference::assignment7_every_line_runs_and_matches)" ;;
+  esac
+  echo "(kind(lib) | test(/^($mods)::/)) & not ($slow)"
 }
 
 export NEXTEST_PROFILE=mutants
@@ -79,7 +77,7 @@ for target in "$@"; do
   # shellcheck disable=SC2086,SC2046
   cargo mutants --in-place --profile mutants --test-tool nextest \
     --timeout "${MUTANTS_TIMEOUT:-240}" ${MUTANTS_ARGS:-} \
-    "${files[@]}" --output "mutants/$name" -- $(tests_for "$target") -E "$(filter_for "$target")" || true
+    "${files[@]}" --output "mutants/$name" -- --lib --test suite -E "$(filter_for "$target")" || true
   for kind in caught missed timeout unviable; do
     f="mutants/$name/mutants.out/$kind.txt"
     printf '%-9s %s\n' "$kind" "$( [ -f "$f" ] && wc -l < "$f" || echo 0)"

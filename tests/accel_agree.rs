@@ -33,7 +33,7 @@ const SCENES: u64 = 48;
 const RAYS_PER_SCENE: usize = 2500;
 
 /// Scenes to check: [`SCENES`], or `ACCEL_AGREE_SCENES` for a longer soak
-/// (`ACCEL_AGREE_SCENES=2000 cargo test --test accel_agree`).
+/// (`ACCEL_AGREE_SCENES=2000 cargo test --test suite accel_agree::`).
 fn scene_count() -> u64 {
     std::env::var("ACCEL_AGREE_SCENES")
         .ok()
@@ -647,7 +647,7 @@ fn unflattened_new_accelerators() {
 }
 
 /// Cost of each accelerator on two 10k-triangle scenes, from the counters:
-/// `cargo test --release --test accel_agree cost_report -- --ignored --nocapture`.
+/// `cargo test --release --test suite accel_agree::cost_report -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn cost_report() {

@@ -2,8 +2,7 @@
 //! and the camera where their keyframes put them then; frames are tasks
 //! (`--frame-from-env`, `#` in output names) and their pieces merge exactly.
 
-mod common;
-use common::*;
+use crate::common::*;
 use glint::math::Vec3;
 use std::path::Path;
 use std::process::Command;

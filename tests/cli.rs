@@ -1,8 +1,7 @@
 //! The binaries as a user meets them: exit statuses, messages, every shared
 //! scene rendering, output formats.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::Path;
 use std::process::Command;
 

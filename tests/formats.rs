@@ -4,8 +4,7 @@
 //! crate's reader for OpenEXR, and Pillow when Python has it (`.ci/run`
 //! installs it and sets `GLINT_REQUIRE_PILLOW=1`, so CI cannot skip it).
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::Path;
 use std::process::Command;
 

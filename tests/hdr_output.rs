@@ -2,8 +2,8 @@
 //! floats, the right way up, written through the same atomic path as the
 //! 8-bit formats.
 
-mod common;
-use common::scratch;
+use crate::common;
+use crate::common::scratch;
 use glint::math::Vec3;
 use glint::output::write_rgb;
 use std::path::Path;

@@ -2,8 +2,7 @@
 //! binaries. One section per class of the issue; every test here failed on
 //! the code before the issue was fixed (each says how), and passes now.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};

@@ -12,11 +12,11 @@
 //! The scenes: four course scenes with directional lights (from the shared
 //! data, skipped when it is absent) and two of glint's own, built here, with
 //! point lights, a textured floor, a closed mesh and a non-uniformly scaled
-//! sphere. `cargo test --test moved_scenes -- --nocapture` prints the table.
+//! sphere. `cargo test --test suite moved_scenes:: -- --nocapture` prints the table.
 
-mod common;
+use crate::common;
 
-use common::diff_pixels;
+use crate::common::diff_pixels;
 use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::math::{Mat4, Vec3};
@@ -487,7 +487,7 @@ fn moved_and_scaled_scenes_render_the_same_image() {
 }
 
 /// What the error-bound offsets achieve without rendering space (for
-/// `docs/numerics.md`): `cargo test --test moved_scenes -- --ignored --nocapture`.
+/// `docs/numerics.md`): `cargo test --test suite moved_scenes:: -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn table_without_rendering_space() {

@@ -2,8 +2,7 @@
 //! single render makes, wrong sets of pieces are refused, and the Slurm and
 //! Kubernetes files of `deploy/` really render and merge a frame.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::Path;
 use std::process::Command;
 

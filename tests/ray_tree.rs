@@ -1,7 +1,7 @@
 //! Properties of the Whitted ray tree on hand-built and shared scenes:
 //! no self-intersection acne, the bounce and weight limits, shadows.
 
-mod common;
+use crate::common;
 use glint::format::load_scene;
 use glint::integrator::{NoObserver, RayKind, RayRecorder, Whitted};
 use glint::math::{Ray, Vec2, Vec3};

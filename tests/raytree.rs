@@ -1,8 +1,7 @@
 //! `glint raytree`: the recorded tree is exactly what the renderer traced,
 //! checked against a tree derived by hand, and every export of it.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::process::Command;
 
 /// A mirror plane through the origin facing (1, 0, 1), seen head-on by an

@@ -17,8 +17,7 @@
 //! and its quirks are reproduced and compared pixel by pixel in
 //! `tests/textures.rs`.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 /// What one image may differ from its reference by.
 #[derive(Clone, Copy, Debug)]

@@ -3,7 +3,7 @@
 //! grow (stratified and low-discrepancy faster than random), and adaptive
 //! subdivision spending rays only on edges.
 
-mod common;
+use crate::common;
 
 use glint::format::load_scene;
 use glint::integrator::Whitted;

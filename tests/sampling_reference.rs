@@ -34,8 +34,7 @@
 //! 5. The checkerboard scenes carry the reference's texture quirks (see
 //!    `tests/reference_images.rs`), hence their wide bounds.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 /// Deterministic images: (name, max mean abs, max fraction off, why).
 const DETERMINISTIC: &[(&str, f64, f64, &str)] = &[

@@ -29,8 +29,7 @@
 //! channel's 8-bit values over the compared pixels, ours `m` and the
 //! reference's `r`, satisfy `|m − r| ≤ 0.05·r`.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 use glint::format::load_scene;
 use glint::integrator::{NoObserver, RayKind, Whitted};

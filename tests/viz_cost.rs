@@ -1,8 +1,7 @@
 //! Cost images: the per-pixel counts add up to the render's totals, for
 //! every accelerator and with many samples per pixel.
 
-mod common;
-use common::*;
+use crate::common::*;
 use glint::accel::{AccelKind, Split};
 use glint::integrator::Whitted;
 use glint::render::{

@@ -2,8 +2,7 @@
 //! cells an independent brute-force overlap test finds, and every course
 //! command line that asks for the view renders it.
 
-mod common;
-use common::*;
+use crate::common::*;
 use glint::accel::grid::Lattice;
 use glint::math::{Aabb, Vec3};
 use glint::shape::Shape;

@@ -3,8 +3,7 @@
 //! ray crossed; the BVH enters exactly the boxes a brute-force list says it
 //! must.
 
-mod common;
-use common::*;
+use crate::common::*;
 use glint::accel::bvh::NodeVisit;
 use glint::accel::grid::{Face, Lattice};
 use glint::accel::{Bvh, Grid, Split};
