@@ -203,6 +203,34 @@ mod tests {
     }
 
     #[test]
+    fn a_light_without_area_sends_nothing() {
+        // Its radiance would be power / 0 = ∞, and ∞ times the zero area
+        // (or solid angle) of a sample is NaN in the pixel.
+        let shapes = [
+            AreaShape::Quad {
+                corner: Vec3::new(0.0, 2.0, 0.0),
+                edge1: Vec3::X,
+                edge2: 2.0 * Vec3::X,
+            },
+            AreaShape::Disk {
+                center: Vec3::new(0.0, 2.0, 0.0),
+                normal: Vec3::NEG_Y,
+                radius: 0.0,
+            },
+            AreaShape::Sphere {
+                center: Vec3::new(0.0, 2.0, 0.0),
+                radius: 0.0,
+            },
+        ];
+        for shape in &shapes {
+            let l = radiance(shape, Vec3::ONE, 100.0);
+            assert_eq!(l, Vec3::ZERO, "{shape:?}");
+            let inc = sample(shape, l, Vec3::ZERO, Vec2::new(0.3, 0.6));
+            assert_eq!(inc.color, Vec3::ZERO, "{shape:?}");
+        }
+    }
+
+    #[test]
     fn concentric_map_stays_in_the_disk() {
         for i in 0..=10 {
             for j in 0..=10 {
