@@ -27,11 +27,6 @@ pub fn radiance(shape: &AreaShape, color: Vec3, power: f32) -> Vec3 {
     }
 }
 
-/// Shadow rays stop this fraction short of the light's surface, so geometry
-/// lying in the light's plane (a ceiling around a ceiling light) does not
-/// shadow it.
-const SHORT: f32 = 1.0 - 1e-4;
-
 /// Light arriving at `p` from the point of `shape` chosen by `u ∈ [0,1)²`,
 /// already divided by the sample's density (`radiance · cos θ_light · A / d²`
 /// for area sampling, `radiance · Ω` for cone sampling).
@@ -89,7 +84,6 @@ fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Inci
     Incident {
         to_light: w,
         color: radiance * (cos_l * area / dist2),
-        distance: dist * SHORT,
         at: Some(at),
     }
 }
@@ -124,7 +118,6 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     Incident {
         to_light: w,
         color: radiance * solid_angle,
-        distance: t * SHORT,
         at: Some(SurfacePoint { p: y, error, n }),
     }
 }

@@ -15,9 +15,6 @@ pub struct Incident {
     pub to_light: Vec3,
     /// Colour arriving (after attenuation).
     pub color: Vec3,
-    /// Distance to the light (infinite for directional lights); shadow rays
-    /// stop there.
-    pub distance: f32,
     /// The chosen point of an area light's surface, with a bound on its
     /// floating-point error and the light's normal there: shadow rays go to
     /// it with both ends offset ([`SurfacePoint::spawn_ray_to_surface`]).
@@ -30,7 +27,6 @@ impl Incident {
     pub const NONE: Incident = Incident {
         to_light: Vec3::ZERO,
         color: Vec3::ZERO,
-        distance: 0.0,
         at: None,
     };
 }
@@ -66,7 +62,6 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
         Light::Directional { direction, color } => Incident {
             to_light: -direction.as_dvec3().normalize_or_zero().as_vec3(),
             color: *color,
-            distance: f32::INFINITY,
             at: None,
         },
         Light::Point {
@@ -79,7 +74,6 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
             Incident {
                 to_light: d.normalize_or_zero().as_vec3(),
                 color: *color * attenuation_factor(*attenuation, dist as f32),
-                distance: dist as f32,
                 at: None,
             }
         }
@@ -113,7 +107,7 @@ mod tests {
     }
 
     #[test]
-    fn point_light_direction_distance_and_falloff() {
+    fn point_light_direction_and_falloff() {
         let l = Light::Point {
             position: Vec3::new(0.0, 4.0, 0.0),
             color: Vec3::ONE,
@@ -121,7 +115,6 @@ mod tests {
         };
         let i = incident(&l, Vec3::ZERO);
         assert_eq!(i.to_light, Vec3::Y);
-        assert_eq!(i.distance, 4.0);
         assert!((i.color.x - 1.0 / 16.0).abs() < 1e-6);
     }
 
@@ -141,7 +134,6 @@ mod tests {
         };
         let i = incident(&l, Vec3::new(0.0, -3e38, 0.0));
         assert_eq!(i.to_light, Vec3::Y);
-        assert_eq!(i.distance, f32::INFINITY);
         assert_eq!(i.color, Vec3::ONE);
     }
 
@@ -153,6 +145,5 @@ mod tests {
         };
         let i = incident(&l, Vec3::ZERO);
         assert_eq!(i.to_light, Vec3::Y);
-        assert!(i.distance.is_infinite());
     }
 }
