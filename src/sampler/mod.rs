@@ -214,7 +214,7 @@ impl Sampler {
             }
             SamplerKind::Sobol => {
                 let i = sobol::owen_scramble(index, h as u32);
-                hash::unit_from_u32(sobol::owen_scramble(sobol::sobol_dim0(i), (h >> 32) as u32))
+                hash::unit_from_u32(sobol::scrambled_dim0(i, (h >> 32) as u32))
             }
         }
     }

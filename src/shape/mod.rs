@@ -17,7 +17,9 @@ pub use moving::Moving;
 pub use plane::Plane;
 pub use sphere::Sphere;
 pub use transformed::Transformed;
-pub use triangle::{intersect_triangle, Triangle, TriangleHit, WatertightRay};
+pub use triangle::{
+    intersect_triangle, is_degenerate_triangle, Triangle, TriangleHit, WatertightRay,
+};
 pub use triangle4::may_hit4;
 
 use crate::math::{Aabb, Ray, SurfacePoint};

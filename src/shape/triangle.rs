@@ -151,6 +151,30 @@ pub fn intersect_triangle(
     })
 }
 
+/// Whether `Triangle::new(v0, v1, v2)` is degenerate, without its
+/// normalisation (a square root and a division per triangle, which a mesh
+/// build pays for every triangle).
+///
+/// Why the same answer: `Triangle::new` normalises the f64 cross product
+/// `n` of the edges and calls the triangle degenerate when the result is
+/// zero or not finite. If a vertex is not finite, an edge has a non-finite
+/// component, which enters two components of `n` as a product with a
+/// finite, infinite or NaN factor (`∞·0` is NaN): `n` is not finite, its
+/// length is infinite or NaN, and `normalize_or_zero` gives zero. If the
+/// vertices are finite, edges are at most `2¹²⁹` and `n`'s components at
+/// most `2²⁵⁹` (finite); a non-zero component is at least `2⁻³⁵⁰` (products
+/// of f64 differences of f32 values, then one rounded difference), so the
+/// squared length lies in `[2⁻⁷⁰⁰, 2⁵²⁰]`, its root's reciprocal is finite
+/// and positive, and the unit result has a component of at least `1/√3`,
+/// non-zero and finite in f32. So: degenerate exactly when `n` is zero or
+/// not finite.
+#[inline]
+pub fn is_degenerate_triangle(v0: Vec3, v1: Vec3, v2: Vec3) -> bool {
+    let (a, b, c) = (v0.as_dvec3(), v1.as_dvec3(), v2.as_dvec3());
+    let n = (b - a).cross(c - a);
+    !(n.is_finite() && n != glam::DVec3::ZERO)
+}
+
 /// A triangle: its three vertices as given (exactly, so that triangles
 /// sharing a vertex share its bits) and its unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -237,6 +261,54 @@ impl Triangle {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The cheap degeneracy test agrees with `Triangle::new`'s normal on
+    /// random, collinear, repeated, tiny, huge and non-finite vertices.
+    #[test]
+    fn degeneracy_without_normalising() {
+        let mut seed = 0x2545_f491_u32;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            f32::MIN_POSITIVE,
+            1e-45,
+            f32::MAX,
+            -f32::MAX,
+            f32::INFINITY,
+            f32::NAN,
+            3.0,
+        ];
+        for i in 0..200_000 {
+            let mut v = || {
+                let mut c = || match rnd() % 4 {
+                    0 => specials[rnd() as usize % specials.len()],
+                    1 => (rnd() % 7) as f32 - 3.0,
+                    _ => Some(f32::from_bits(rnd()))
+                        .filter(|f| f.is_finite())
+                        .unwrap_or(2.0),
+                };
+                Vec3::new(c(), c(), c())
+            };
+            let (a, b) = (v(), v());
+            let c = match i % 4 {
+                0 => a + (b - a) * 0.5, // collinear (up to rounding)
+                1 => a,
+                _ => v(),
+            };
+            assert_eq!(
+                is_degenerate_triangle(a, b, c),
+                Triangle::new(a, b, c).is_degenerate(),
+                "{a:?} {b:?} {c:?}"
+            );
+        }
+    }
 
     fn tri() -> Triangle {
         Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)

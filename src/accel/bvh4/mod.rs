@@ -39,7 +39,7 @@ pub use traverse::{Fallback, TrianglesOnly};
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
-use crate::shape::{Shape, Triangle};
+use crate::shape::{is_degenerate_triangle, Shape};
 use crate::stats::{Counters, TraversalStats};
 use build::{Item, Source};
 pub(crate) use node::Node;
@@ -99,7 +99,7 @@ impl<V: Copy + Into<Vec3> + Sync> Source for IndexedMesh<'_, V> {
     fn item(&self, id: u32) -> Item {
         let [a, b, c] = self.indices[id as usize].map(|i| self.vertices[i as usize].into());
         // The same degeneracy rule as the world's triangles.
-        if Triangle::new(a, b, c).is_degenerate() {
+        if is_degenerate_triangle(a, b, c) {
             Item::Skip
         } else {
             Item::Triangle([a, b, c])
