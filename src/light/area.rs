@@ -109,12 +109,16 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     let disc = (r * r - (d2 - b * b)).max(0.0);
     let t = b - disc.sqrt();
     let solid_angle = TAU * (1.0 - cos_max);
-    // The point re-projected onto the sphere, with pbrt's bound for a point
-    // so computed.
+    // The point re-projected onto the sphere (pbrt bounds its object-space
+    // version by `|y|`; here the centre is not at the origin).
     let y = p + w * t;
     let n = (y - c).normalize_or_zero();
-    let y = c + r * n;
-    let error = gamma(5) * y.abs();
+    let rn = r * n;
+    let y = c + rn;
+    // Off the exact sphere by `r` times the rounding of `n`'s length and by
+    // the rounding of the sum: bounded by the terms' sizes, not by `|y|`,
+    // which is small where the centre and the offset cancel.
+    let error = gamma(5) * (c.abs() + rn.abs());
     Incident {
         to_light: w,
         color: radiance * solid_angle,
@@ -259,8 +263,9 @@ mod tests {
     /// too small lets the light's own plane (a ceiling around a ceiling
     /// light) block the ray at some samples, one too large lets occluders
     /// just below the light through. Over quads and disks from the origin to
-    /// 10⁵ away and from 10⁻³ to 10³ across, the box holds the exact point
-    /// (f64) and is within a few roundings of the coordinates' size.
+    /// 10⁵ away and from 10⁻³ to 10³ across (and spheres likewise), the box
+    /// holds the exact point (f64) and is within a few roundings of the
+    /// coordinates' size.
     #[test]
     fn sample_points_lie_in_tight_error_boxes() {
         let mut r = unit_values(7);
@@ -299,6 +304,20 @@ mod tests {
                     limit,
                     &format!("disk {disk:?} at {u}"),
                 );
+            }
+            let sphere = AreaShape::Sphere {
+                center,
+                radius: size,
+            };
+            if let Some(at) = sample(&sphere, Vec3::ONE, center + normal * far * 3.0, u).at {
+                // The nearest point of the exact sphere (a sphere smaller
+                // than the rounding of its centre's coordinates may sample
+                // the centre itself).
+                let (c, n) = (center.as_dvec3(), at.n.as_dvec3());
+                let out = (at.p.as_dvec3() - c).try_normalize().unwrap_or(n);
+                let truth = c + out * size as f64;
+                let limit = g * (center.abs() + Vec3::splat(size));
+                check_box(at, truth, Some(n), limit, &format!("{sphere:?} at {u}"));
             }
         }
     }
