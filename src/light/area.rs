@@ -228,6 +228,27 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_point_on_the_light_or_out_of_range_gets_nothing() {
+        let quad = AreaShape::Quad {
+            corner: Vec3::ZERO,
+            edge1: Vec3::X,
+            edge2: Vec3::Z,
+        };
+        // The sample is the shading point itself: no direction, and the
+        // density's 1/d² is infinite.
+        assert_eq!(
+            sample(&quad, Vec3::ONE, Vec3::ZERO, Vec2::ZERO),
+            Incident::NONE
+        );
+        // The squared distance overflows f32.
+        let far = Vec3::splat(3e19);
+        assert_eq!(
+            sample(&quad, Vec3::ONE, far, Vec2::splat(0.5)),
+            Incident::NONE
+        );
+    }
+
     /// Deterministic values in [0, 1) for the tests below (a 64-bit LCG).
     fn unit_values(seed: u64) -> impl FnMut() -> f32 {
         let mut x = seed;
