@@ -163,31 +163,50 @@ mod tests {
     #[test]
     fn small_lights_act_like_their_solid_angle() {
         // Irradiance from a small source of unit radiance facing the point:
-        // about its solid angle.
-        let p = Vec3::ZERO;
+        // about its solid angle; at the origin and elsewhere.
         let d = 10.0;
-        let quad = AreaShape::Quad {
-            corner: Vec3::new(-0.1, d, -0.1),
-            edge1: Vec3::new(0.2, 0.0, 0.0),
-            edge2: Vec3::new(0.0, 0.0, 0.2),
-        };
-        let e = irradiance(&quad, p, Vec3::Y);
-        assert!((e - 0.04 / (d * d)).abs() < 1e-3 * e, "{e}");
-        let disk = AreaShape::Disk {
-            center: Vec3::new(0.0, d, 0.0),
-            normal: Vec3::NEG_Y,
-            radius: 0.1,
-        };
-        let e = irradiance(&disk, p, Vec3::Y);
-        assert!((e - PI * 0.01 / (d * d)).abs() < 1e-3 * e, "{e}");
+        for p in [Vec3::ZERO, Vec3::new(3.0, -2.0, 5.0)] {
+            let quad = AreaShape::Quad {
+                corner: p + Vec3::new(-0.1, d, -0.1),
+                edge1: Vec3::new(0.2, 0.0, 0.0),
+                edge2: Vec3::new(0.0, 0.0, 0.2),
+            };
+            let e = irradiance(&quad, p, Vec3::Y);
+            assert!((e - 0.04 / (d * d)).abs() < 1e-3 * e, "{p}: {e}");
+            let disk = AreaShape::Disk {
+                center: p + Vec3::new(0.0, d, 0.0),
+                normal: Vec3::NEG_Y,
+                radius: 0.1,
+            };
+            let e = irradiance(&disk, p, Vec3::Y);
+            assert!((e - PI * 0.01 / (d * d)).abs() < 1e-3 * e, "{p}: {e}");
+            let sphere = AreaShape::Sphere {
+                center: p + Vec3::new(0.0, d, 0.0),
+                radius: 1.0,
+            };
+            // Exact: π sin²θ_max for a sphere straight above.
+            let e = irradiance(&sphere, p, Vec3::Y);
+            let want = PI / (d * d);
+            assert!((e - want).abs() < 1e-3 * want, "{p}: {e} vs {want}");
+        }
+    }
+
+    #[test]
+    fn a_sphere_light_lights_nothing_inside_it() {
         let sphere = AreaShape::Sphere {
-            center: Vec3::new(0.0, d, 0.0),
-            radius: 1.0,
+            center: Vec3::new(1.0, 2.0, 3.0),
+            radius: 3.0,
         };
-        // Exact: π sin²θ_max for a sphere straight above.
-        let e = irradiance(&sphere, p, Vec3::Y);
-        let want = PI / (d * d);
-        assert!((e - want).abs() < 1e-3 * want, "{e} vs {want}");
+        let at = |r: f32| {
+            sample(
+                &sphere,
+                Vec3::ONE,
+                Vec3::new(1.0, 2.0 + r, 3.0),
+                Vec2::splat(0.5),
+            )
+        };
+        assert_eq!(at(2.8), Incident::NONE);
+        assert!(at(3.2).color.x > 0.0);
     }
 
     #[test]
