@@ -192,6 +192,32 @@ mod tests {
     }
 
     #[test]
+    fn sphere_samples_are_the_near_points_along_their_directions() {
+        let c = Vec3::new(1.0, 2.0, 3.0);
+        let sphere = AreaShape::Sphere {
+            center: c,
+            radius: 1.5,
+        };
+        let p = Vec3::new(-2.0, 4.0, 0.5);
+        let tangent = ((p - c).length_squared() - 1.5 * 1.5).sqrt();
+        for i in 0..16 {
+            for j in 0..16 {
+                let u = Vec2::new((i as f32 + 0.5) / 16.0, (j as f32 + 0.5) / 16.0);
+                let inc = sample(&sphere, Vec3::ONE, p, u);
+                let y = inc.at.unwrap().p;
+                // On the sphere, on the sample's direction, and on the side
+                // facing p (no farther than the tangent points).
+                assert!(((y - c).length() - 1.5).abs() < 1e-5, "{u}: {y}");
+                assert!(
+                    (y - p).normalize().dot(inc.to_light) > 1.0 - 1e-6,
+                    "{u}: {y}"
+                );
+                assert!((y - p).length() <= tangent + 1e-4, "{u}: {y}");
+            }
+        }
+    }
+
+    #[test]
     fn a_sphere_light_lights_nothing_inside_it() {
         let sphere = AreaShape::Sphere {
             center: Vec3::new(1.0, 2.0, 3.0),
