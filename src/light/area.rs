@@ -180,14 +180,23 @@ mod tests {
             };
             let e = irradiance(&disk, p, Vec3::Y);
             assert!((e - PI * 0.01 / (d * d)).abs() < 1e-3 * e, "{p}: {e}");
+            let r = 0.5;
             let sphere = AreaShape::Sphere {
                 center: p + Vec3::new(0.0, d, 0.0),
-                radius: 1.0,
+                radius: r,
             };
-            // Exact: π sin²θ_max for a sphere straight above.
-            let e = irradiance(&sphere, p, Vec3::Y);
-            let want = PI / (d * d);
-            assert!((e - want).abs() < 1e-3 * want, "{p}: {e} vs {want}");
+            // Exact: π sin²θ_max cos α for a sphere wholly above the
+            // horizon, α away from the normal (straight above, and tilted:
+            // the tilt sees whether directions spread evenly round the axis).
+            for alpha in [0.0f32, 0.7] {
+                let n = Vec3::new(alpha.sin(), alpha.cos(), 0.0);
+                let e = irradiance(&sphere, p, n);
+                let want = PI * r * r / (d * d) * alpha.cos();
+                assert!(
+                    (e - want).abs() < 1e-3 * want,
+                    "{p}, {alpha}: {e} vs {want}"
+                );
+            }
         }
     }
 
@@ -208,6 +217,7 @@ mod tests {
                 // On the sphere, on the sample's direction, and on the side
                 // facing p (no farther than the tangent points).
                 assert!(((y - c).length() - 1.5).abs() < 1e-5, "{u}: {y}");
+                assert!((inc.to_light.length() - 1.0).abs() < 1e-6, "{u}");
                 assert!(
                     (y - p).normalize().dot(inc.to_light) > 1.0 - 1e-6,
                     "{u}: {y}"
