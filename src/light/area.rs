@@ -398,6 +398,34 @@ mod tests {
         }
     }
 
+    /// Equal areas of the square go to equal areas of the disk: over a
+    /// fine grid, the moments and the share of each ring and sector are a
+    /// uniform disk's.
+    #[test]
+    fn concentric_map_is_uniform_over_the_disk() {
+        let k = 200;
+        let (mut m, mut inner) = (DVec3::ZERO, 0);
+        let mut sectors = [0u32; 8];
+        for i in 0..k {
+            for j in 0..k {
+                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                let d = concentric_disk(u).as_dvec2();
+                m += DVec3::new(d.x, d.y, d.x * d.x);
+                inner += u32::from(d.length() < 0.5);
+                let a = d.y.atan2(d.x).rem_euclid(std::f64::consts::TAU);
+                sectors[((a / std::f64::consts::FRAC_PI_4) as usize).min(7)] += 1;
+            }
+        }
+        let n = (k * k) as f64;
+        let m = m / n;
+        assert!(m.x.abs() < 1e-3 && m.y.abs() < 1e-3, "mean {m}");
+        assert!((m.z - 0.25).abs() < 1e-3, "E[x²] {}", m.z);
+        assert!((inner as f64 / n - 0.25).abs() < 2e-3, "inner ring {inner}");
+        for s in sectors {
+            assert!((s as f64 / n - 0.125).abs() < 2e-3, "{sectors:?}");
+        }
+    }
+
     #[test]
     fn concentric_map_stays_in_the_disk() {
         for i in 0..=10 {
