@@ -424,6 +424,16 @@ mod tests {
         for s in sectors {
             assert!((s as f64 / n - 0.125).abs() < 2e-3, "{sectors:?}");
         }
+        // And continuously (what keeps strata compact): neighbours on the
+        // grid stay neighbours, across the diagonals between the branches.
+        let at = |i: i32, j: i32| concentric_disk(Vec2::new(i as f32, j as f32) / k as f32);
+        for i in 0..k {
+            for j in 0..k {
+                let d = at(i, j);
+                let step = (at(i + 1, j) - d).length().max((at(i, j + 1) - d).length());
+                assert!(step < 4.0 / k as f32, "({i}, {j}): {step}");
+            }
+        }
     }
 
     #[test]
