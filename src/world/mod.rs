@@ -20,6 +20,7 @@ pub use build::BuildOptions;
 use crate::accel::Aggregate;
 use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
 use crate::scene::{Background, Camera, Light, Material};
+use crate::shape::Shape;
 use crate::stats::Counters;
 use glam::DVec3;
 
@@ -101,18 +102,23 @@ pub struct World {
 impl World {
     /// Closest hit with `tmin < t < tmax`.
     pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> Option<Hit> {
-        let mut best = self.accel.intersect(&self.prims, ray, tmin, tmax, c);
-        let mut tmax = best.map_or(tmax, |h| h.t);
+        let mut best = (self.accel).intersect_barycentric(&self.prims, ray, tmin, tmax, c);
+        let mut tmax = best.map_or(tmax, |h| h.0.t);
         for &i in &self.unbounded {
             c.intersection_tests += 1;
             if let Some(t) = self.prims[i as usize].shape.intersect(ray, tmin, tmax) {
                 tmax = t;
-                best = Some(crate::accel::PrimHit { t, prim: i });
+                best = Some((crate::accel::PrimHit { t, prim: i }, None));
             }
         }
-        best.map(|h| {
+        best.map(|(h, bary)| {
             let p = &self.prims[h.prim as usize];
-            let s = p.shape.surface(ray, h.t);
+            // The aggregate's barycentrics are the ones `Triangle::surface`
+            // would re-run the watertight test for (same ray, same vertices).
+            let s = match (&p.shape, bary) {
+                (Shape::Triangle(tr), Some(b)) => tr.surface_at(b),
+                (shape, _) => shape.surface(ray, h.t),
+            };
             Hit {
                 t: h.t,
                 point: s.p,
