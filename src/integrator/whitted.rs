@@ -13,7 +13,7 @@
 use super::ao::{unoccluded, AoSettings};
 use super::optics::{reflect, refract};
 use super::{RayKind, RayObserver};
-use crate::light::{incident, is_delta, sample_light, Incident};
+use crate::light::{is_delta, sample_light, Incident};
 use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
 use crate::math::{Ray, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
@@ -150,12 +150,12 @@ impl Whitted {
                 color *= unoccluded(world, &from, n, ray.time, ao, depth, stream, c, obs);
             }
         }
-        for light in &world.lights {
+        for (i, light) in world.lights.iter().enumerate() {
             if !is_delta(light) {
                 color += self.area_light(world, ray, hit, light, &m, n, d, depth, stream, c, obs);
                 continue;
             }
-            let inc = incident(light, p);
+            let inc = world.incident(i, light, p);
             color += self.lit(world, ray, hit, light, &inc, &m, n, d, depth, c, obs);
         }
 

@@ -13,6 +13,7 @@
 //! world-space point or ray is brought in with [`World::ray_from_world`].
 
 mod build;
+mod lights;
 
 pub use crate::primitive::Primitive;
 pub use build::BuildOptions;
@@ -97,6 +98,8 @@ pub struct World {
     /// The scene's object tree over `prims` (groups, transforms, shapes), as
     /// flattening met it: what `bvh-hierarchy` is built from.
     pub scene_tree: crate::accel::SceneTree,
+    /// What of `lights` is the same at every shading point, prepared once.
+    prepared_lights: lights::PreparedLights,
 }
 
 impl World {
@@ -129,6 +132,15 @@ impl World {
                 instance: p.instance,
             }
         })
+    }
+
+    /// What the world's light number `index` (`light`, i.e.
+    /// `&self.lights[index]`) sends to point `p`: `light::incident(light,
+    /// p)`, with a directional light's normalised direction prepared once
+    /// per world (and re-done should the light have changed since).
+    #[inline]
+    pub fn incident(&self, index: usize, light: &Light, p: Vec3) -> crate::light::Incident {
+        self.prepared_lights.incident(index, light, p)
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
