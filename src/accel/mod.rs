@@ -76,6 +76,24 @@ pub trait Aggregate: Send + Sync {
         counters: &mut Counters,
     ) -> Option<PrimHit>;
 
+    /// [`intersect`](Self::intersect), with the barycentrics of the hit
+    /// when it is a triangle and the aggregate's own test produced them
+    /// (`None` otherwise). They are what `Triangle::hit` gives for the same
+    /// ray, bit for bit (the same watertight test on the same vertices in
+    /// the same order), so the world builds the surface point from them
+    /// instead of re-running the test. The default has none.
+    fn intersect_barycentric(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        counters: &mut Counters,
+    ) -> Option<(PrimHit, Option<[f32; 3]>)> {
+        self.intersect(prims, ray, tmin, tmax, counters)
+            .map(|h| (h, None))
+    }
+
     /// Whether anything lies on the ray with `tmin < t < tmax` (stops at the
     /// first hit: shadow rays need no closest hit).
     fn occluded(

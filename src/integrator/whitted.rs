@@ -13,10 +13,10 @@
 use super::ao::{unoccluded, AoSettings};
 use super::optics::{reflect, refract};
 use super::{RayKind, RayObserver};
-use crate::light::{incident, is_delta, sample_light, Incident};
+use crate::light::{is_delta, sample_light, Incident};
 use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
-use crate::math::{Ray, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
+use crate::math::{Ray, Spawn, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
 use crate::sampler::{SampleStream, Sampler};
 use crate::scene::Light;
 use crate::stats::Counters;
@@ -150,13 +150,15 @@ impl Whitted {
                 color *= unoccluded(world, &from, n, ray.time, ao, depth, stream, c, obs);
             }
         }
-        for light in &world.lights {
+        // The lights' shadow rays share their offset origins (`Spawn`).
+        let from = &mut Spawn::new(hit.surface_point());
+        for (i, light) in world.lights.iter().enumerate() {
             if !is_delta(light) {
-                color += self.area_light(world, ray, hit, light, &m, n, d, depth, stream, c, obs);
+                color += self.area_light(world, ray, from, light, &m, n, d, depth, stream, c, obs);
                 continue;
             }
-            let inc = incident(light, p);
-            color += self.lit(world, ray, hit, light, &inc, &m, n, d, depth, c, obs);
+            let inc = world.incident(i, light, p);
+            color += self.lit(world, ray, from, light, &inc, &m, n, d, depth, c, obs);
         }
 
         if depth >= self.bounces {
@@ -261,7 +263,7 @@ impl Whitted {
         &self,
         world: &World,
         ray: &Ray,
-        hit: &Hit,
+        from: &mut Spawn,
         light: &Light,
         m: &crate::scene::Phong,
         n: Vec3,
@@ -272,11 +274,11 @@ impl Whitted {
         obs: &mut impl RayObserver,
     ) -> Vec3 {
         let k = self.shadow_samples.max(1);
-        let p = hit.point;
+        let p = from.from.p;
         let mut sum = Vec3::ZERO;
         for u in stream.split_2d(k) {
             let inc = sample_light(light, p, u);
-            sum += self.lit(world, ray, hit, light, &inc, m, n, d, depth, c, obs);
+            sum += self.lit(world, ray, from, light, &inc, m, n, d, depth, c, obs);
         }
         sum / k as f32
     }
@@ -305,7 +307,7 @@ impl Whitted {
         &self,
         world: &World,
         ray: &Ray,
-        hit: &Hit,
+        from: &mut Spawn,
         light: &Light,
         inc: &Incident,
         m: &crate::scene::Phong,
@@ -323,7 +325,6 @@ impl Whitted {
         // between, and a zero-direction shadow ray would be meaningless.
         if self.shadows && inc.to_light != Vec3::ZERO {
             let target = ShadowTarget::of(light, inc);
-            let from = hit.surface_point();
             reflected * self.light_through(world, from, ray.time, target, depth, c, obs)
         } else {
             reflected
@@ -338,7 +339,7 @@ impl Whitted {
     fn light_through(
         &self,
         world: &World,
-        from: SurfacePoint,
+        from: &mut Spawn,
         time: f32,
         target: ShadowTarget,
         depth: u32,
@@ -347,18 +348,18 @@ impl Whitted {
     ) -> Vec3 {
         super::count_ray(c, RayKind::Shadow);
         if !self.transparent_shadows {
-            let (shadow, tmax) = target.ray_from(&from, time);
+            let (shadow, tmax) = target.ray_from(from, time);
             let blocked = world.occluded(&shadow, 0.0, tmax, c);
             obs.shadow(&shadow, tmax, blocked, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut filter = Vec3::ONE;
-        let mut from = from;
+        let mut from = *from;
         // Each pass steps past one occluder, spawning the next segment from
         // its hit; the cap guards against a ray trapped between coincident
         // surfaces.
         for _ in 0..64 {
-            let (ray, tmax) = target.ray_from(&from, time);
+            let (ray, tmax) = target.ray_from(&mut from, time);
             let Some(h) = world.intersect(&ray, 0.0, tmax, c) else {
                 obs.ray(RayKind::Shadow, &ray, tmax, depth, 0.0, None);
                 return filter;
@@ -368,7 +369,7 @@ impl Whitted {
             if filter == Vec3::ZERO {
                 return filter;
             }
-            from = h.surface_point();
+            from = Spawn::new(h.surface_point());
         }
         Vec3::ZERO
     }
@@ -403,7 +404,7 @@ impl ShadowTarget {
     /// light's sample likewise, with its own end offset out of its error
     /// bound too. The ray travels at instant `time` (motion blur: shadows
     /// of moving objects are cast where they are at that instant).
-    fn ray_from(self, from: &SurfacePoint, time: f32) -> (Ray, f32) {
+    fn ray_from(self, from: &mut Spawn, time: f32) -> (Ray, f32) {
         let (ray, tmax) = match self {
             ShadowTarget::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),
             ShadowTarget::Direction(d) => (from.spawn_ray(d), f32::INFINITY),

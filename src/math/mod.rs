@@ -6,9 +6,11 @@ mod aabb;
 pub mod float;
 mod motion;
 mod ray;
+mod spawn;
 
 pub use aabb::Aabb;
 pub use float::gamma;
 pub use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 pub use motion::{Keyframe, Motion, SWEEP_STEPS};
 pub use ray::{Ray, SurfacePoint, SHADOW_EPSILON};
+pub use spawn::Spawn;

@@ -234,21 +234,24 @@ impl Triangle {
     /// re-running the identical test (it is deterministic), once per closest
     /// hit rather than for every candidate.
     pub fn surface(&self, ray: &Ray, t: f32) -> SurfacePoint {
-        let [p0, p1, p2] = self.v;
         match self.hit(ray, f32::NEG_INFINITY, f32::INFINITY) {
-            Some(TriangleHit {
-                b: [b0, b1, b2], ..
-            }) => {
-                let (q0, q1, q2) = (b0 * p0, b1 * p1, b2 * p2);
-                SurfacePoint {
-                    p: q0 + q1 + q2,
-                    error: gamma(7) * (q0.abs() + q1.abs() + q2.abs()),
-                    n: self.normal,
-                }
-            }
+            Some(h) => self.surface_at(h.b),
             // Unreachable for a `t` this triangle reported; the projection
             // onto its plane is the safe answer anyway.
-            None => project_onto_plane(ray.at(t), self.normal, self.normal.dot(p0)),
+            None => project_onto_plane(ray.at(t), self.normal, self.normal.dot(self.v[0])),
+        }
+    }
+
+    /// The surface point at barycentrics `b` (see [`surface`](Self::surface)),
+    /// for a caller whose own run of the watertight test kept them.
+    #[inline]
+    pub fn surface_at(&self, b: [f32; 3]) -> SurfacePoint {
+        let [p0, p1, p2] = self.v;
+        let (q0, q1, q2) = (b[0] * p0, b[1] * p1, b[2] * p2);
+        SurfacePoint {
+            p: q0 + q1 + q2,
+            error: gamma(7) * (q0.abs() + q1.abs() + q2.abs()),
+            n: self.normal,
         }
     }
 

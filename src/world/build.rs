@@ -80,18 +80,18 @@ impl World {
             (0..f.prims.len() as u32).partition(|&i| f.prims[i as usize].bounds().is_finite());
         let start = Instant::now();
         let accel = build_aggregate(opts.accel, &f.prims, bounded, &tree);
+        let lights: Vec<Light> = (scene.lights.iter())
+            .map(|l| light_to_render_space(l, origin))
+            .collect();
         World {
             build_ms: start.elapsed().as_secs_f64() * 1e3,
+            prepared_lights: super::lights::PreparedLights::new(&lights),
+            lights,
             prims: f.prims,
             accel,
             unbounded,
             materials,
             object_materials,
-            lights: scene
-                .lights
-                .iter()
-                .map(|l| light_to_render_space(l, origin))
-                .collect(),
             camera: camera_to_render_space(&scene.camera, origin),
             origin,
             background: scene.background.clone(),

@@ -13,6 +13,7 @@
 //! world-space point or ray is brought in with [`World::ray_from_world`].
 
 mod build;
+mod lights;
 
 pub use crate::primitive::Primitive;
 pub use build::BuildOptions;
@@ -20,6 +21,7 @@ pub use build::BuildOptions;
 use crate::accel::Aggregate;
 use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
 use crate::scene::{Background, Camera, Light, Material};
+use crate::shape::Shape;
 use crate::stats::Counters;
 use glam::DVec3;
 
@@ -96,23 +98,30 @@ pub struct World {
     /// The scene's object tree over `prims` (groups, transforms, shapes), as
     /// flattening met it: what `bvh-hierarchy` is built from.
     pub scene_tree: crate::accel::SceneTree,
+    /// What of `lights` is the same at every shading point, prepared once.
+    prepared_lights: lights::PreparedLights,
 }
 
 impl World {
     /// Closest hit with `tmin < t < tmax`.
     pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> Option<Hit> {
-        let mut best = self.accel.intersect(&self.prims, ray, tmin, tmax, c);
-        let mut tmax = best.map_or(tmax, |h| h.t);
+        let mut best = (self.accel).intersect_barycentric(&self.prims, ray, tmin, tmax, c);
+        let mut tmax = best.map_or(tmax, |h| h.0.t);
         for &i in &self.unbounded {
             c.intersection_tests += 1;
             if let Some(t) = self.prims[i as usize].shape.intersect(ray, tmin, tmax) {
                 tmax = t;
-                best = Some(crate::accel::PrimHit { t, prim: i });
+                best = Some((crate::accel::PrimHit { t, prim: i }, None));
             }
         }
-        best.map(|h| {
+        best.map(|(h, bary)| {
             let p = &self.prims[h.prim as usize];
-            let s = p.shape.surface(ray, h.t);
+            // The aggregate's barycentrics are the ones `Triangle::surface`
+            // would re-run the watertight test for (same ray, same vertices).
+            let s = match (&p.shape, bary) {
+                (Shape::Triangle(tr), Some(b)) => tr.surface_at(b),
+                (shape, _) => shape.surface(ray, h.t),
+            };
             Hit {
                 t: h.t,
                 point: s.p,
@@ -123,6 +132,15 @@ impl World {
                 instance: p.instance,
             }
         })
+    }
+
+    /// What the world's light number `index` (`light`, i.e.
+    /// `&self.lights[index]`) sends to point `p`: `light::incident(light,
+    /// p)`, with a directional light's normalised direction prepared once
+    /// per world (and re-done should the light have changed since).
+    #[inline]
+    pub fn incident(&self, index: usize, light: &Light, p: Vec3) -> crate::light::Incident {
+        self.prepared_lights.incident(index, light, p)
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.

@@ -11,7 +11,7 @@
 //! (`traverse::RayData::boxes_avx`, given an `Avx` token made only here).
 
 use super::node::{Node, Tri4};
-use super::traverse::{self, Fallback, Portable, RayData, DEEP, SHALLOW};
+use super::traverse::{self, Closest, Fallback, Portable, RayData, DEEP, SHALLOW};
 use crate::math::Ray;
 use crate::stats::TraversalStats;
 
@@ -28,7 +28,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     tmax: f32,
     stats: &mut S,
     deep: bool,
-) -> Option<(f32, u32)> {
+) -> Option<Closest> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: calling a `#[target_feature(enable = "avx2")]` function is
@@ -89,7 +89,7 @@ mod avx2 {
         tmax: f32,
         stats: &mut S,
         deep: bool,
-    ) -> Option<(f32, u32)> {
+    ) -> Option<Closest> {
         // SAFETY: these functions are called only after
         // `is_x86_feature_detected!("avx2")` (`Avx::new`'s contract).
         let avx = unsafe { Avx::new() };

@@ -162,6 +162,20 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> Option<(f32, u32)> {
+        self.closest_hit(fallback, ray, tmin, tmax, stats)
+            .map(|h| (h.t, h.id))
+    }
+
+    /// [`closest`](Self::closest) with a triangle hit's barycentrics.
+    #[inline]
+    pub(crate) fn closest_hit<S: TraversalStats, F: Fallback + ?Sized>(
+        &self,
+        fallback: &F,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        stats: &mut S,
+    ) -> Option<traverse::Closest> {
         let (n, t) = (&self.nodes, &self.tris);
         dispatch::closest(n, t, fallback, ray, tmin, tmax, stats, self.deep)
     }
@@ -192,6 +206,18 @@ impl Aggregate for Bvh4 {
     ) -> Option<PrimHit> {
         self.closest(prims, ray, tmin, tmax, c)
             .map(|(t, prim)| PrimHit { t, prim })
+    }
+
+    fn intersect_barycentric(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+    ) -> Option<(PrimHit, Option<[f32; 3]>)> {
+        self.closest_hit(prims, ray, tmin, tmax, c)
+            .map(|h| (PrimHit { t: h.t, prim: h.id }, h.bary))
     }
 
     fn occluded(
@@ -279,11 +305,47 @@ mod tests {
             for deep_stack in [false, true] {
                 let inf = f32::INFINITY;
                 let c = dispatch::closest(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
-                assert_eq!(c, deep.closest(&prims[..], &r, 0.0, inf, ns));
+                assert_eq!(c, deep.closest_hit(&prims[..], &r, 0.0, inf, ns));
                 let a = dispatch::any(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
                 assert_eq!(a, c.is_some());
             }
         }
+    }
+
+    /// The barycentrics the traversal hands out are the ones the world's
+    /// `Triangle::surface` would re-run the test for, bit for bit (and a
+    /// fallback item, the soup's spheres, has none).
+    #[test]
+    fn barycentrics_are_the_triangles_own() {
+        let prims = soup(12, 3000);
+        let b = Bvh4::new(&prims, all(&prims));
+        let mut hits = 0;
+        for i in 0..3000 {
+            let f = i as f32;
+            let o = Vec3::new((f * 0.37).sin(), (f * 0.73).cos(), -9.0);
+            let r = Ray::new(
+                o,
+                Vec3::new((f * 0.11).cos() * 0.3, (f * 0.29).sin() * 0.3, 1.0),
+            );
+            let Some(h) = b.closest_hit(
+                &prims[..],
+                &r,
+                0.0,
+                f32::INFINITY,
+                &mut crate::stats::NoStats,
+            ) else {
+                continue;
+            };
+            let crate::shape::Shape::Triangle(tr) = &prims[h.id as usize].shape else {
+                assert_eq!(h.bary, None, "a sphere's hit has no barycentrics");
+                continue;
+            };
+            let own = tr.hit(&r, f32::NEG_INFINITY, f32::INFINITY).unwrap();
+            assert_eq!(h.bary.unwrap().map(f32::to_bits), own.b.map(f32::to_bits));
+            assert_eq!(tr.surface_at(own.b), tr.surface(&r, h.t));
+            hits += 1;
+        }
+        assert!(hits > 100, "{hits}");
     }
 
     #[test]

@@ -148,10 +148,16 @@ impl RayData {
     /// lanes it proves missed; each remaining lane calls the very function
     /// brute force calls, so results are bit-identical. Unused and
     /// non-triangle lanes (NaN vertices) are skipped by their ids.
+    ///
+    /// The barycentrics of each lane hit come along too: the closest hit
+    /// hands them to `Triangle::surface_at`, so the world need not re-run
+    /// the test for them (the any-hit walk ignores them; they are dead code
+    /// there once inlined).
     #[inline(always)]
-    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, Vec4) {
+    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, Vec4, [[f32; 3]; 4]) {
         let mut mask = 0;
         let mut t = Vec4::ZERO;
+        let mut bary = [[0.0; 3]; 4];
         let mut todo = may_hit4(&self.wt, &b.v) & triangle_lanes(b);
         while todo != 0 {
             let lane = todo.trailing_zeros() as usize;
@@ -160,9 +166,10 @@ impl RayData {
             if let Some(h) = intersect_triangle(&self.wt, p(0), p(1), p(2), tmin, tmax) {
                 mask |= 1 << lane;
                 t[lane] = h.t;
+                bary[lane] = h.b;
             }
         }
-        (mask, t)
+        (mask, t, bary)
     }
 }
 
@@ -265,7 +272,17 @@ fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: 
     kids[k - 1].0
 }
 
-/// The closest hit: `(t, item id)`, with an `N`-entry stack ([`SHALLOW`]
+/// The closest hit of a traversal: its parameter, its item id, and, for a
+/// triangle, the watertight test's barycentrics (`None` for an item the
+/// fallback tested).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Closest {
+    pub t: f32,
+    pub id: u32,
+    pub bary: Option<[f32; 3]>,
+}
+
+/// The closest hit ([`Closest`]), with an `N`-entry stack ([`SHALLOW`]
 /// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
 /// AVX2 copy compiles it with AVX2.
 #[allow(clippy::too_many_arguments)]
@@ -279,12 +296,12 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
     tmin: f32,
     tmax: f32,
     stats: &mut S,
-) -> Option<(f32, u32)> {
+) -> Option<Closest> {
     if nodes.is_empty() {
         return None;
     }
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
-    let mut best: Option<(f32, u32)> = None;
+    let mut best: Option<Closest> = None;
     let mut tmax = tmax;
     let tmin4 = Lanes::splat(tmin);
     let mut stack = [(0u32, 0f32); N];
@@ -312,13 +329,17 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                let (mut mask, t) = rd.triangles(b, tmin, tmax);
+                let (mut mask, t, bary) = rd.triangles(b, tmin, tmax);
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if t[i] < tmax {
                         tmax = t[i];
-                        best = Some((t[i], b.ids[i]));
+                        best = Some(Closest {
+                            t: t[i],
+                            id: b.ids[i],
+                            bary: Some(bary[i]),
+                        });
                     }
                 }
                 if b.has_other() {
@@ -327,7 +348,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
                             let id = id & !OTHER;
                             if let Some(t) = fallback.intersect(id, &rd.ray, tmin, tmax) {
                                 tmax = t;
-                                best = Some((t, id));
+                                best = Some(Closest { t, id, bary: None });
                             }
                         }
                     }
