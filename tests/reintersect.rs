@@ -1,6 +1,7 @@
 //! Re-intersection property test (as pbrt's): random rays hit random shapes
-//! (spheres, ellipsoids kept as transformed shapes, triangles, planes, a
-//! closed triangle mesh; flattened and with transforms kept) at random
+//! (spheres, ellipsoids kept as transformed shapes, ellipsoids under a
+//! keyframed motion hit at one instant, triangles, planes, a closed triangle
+//! mesh; flattened and with transforms kept) at random
 //! positions up to 10⁵ from the origin and random sizes (10⁻³..10³); from
 //! each hit, rays are spawned in random directions with
 //! [`glint::world::Hit::spawn_ray`]:
@@ -21,7 +22,7 @@
 //! Deterministic (a seeded generator); a failure prints the case and seed.
 
 use glam::{DMat4, DVec3};
-use glint::math::{Ray, Vec3};
+use glint::math::{Keyframe, Motion, Ray, Vec3};
 use glint::scene::{Background, Camera, Mesh, Node, Scene, Shape};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, Hit, World};
@@ -102,6 +103,9 @@ fn rotation(r: &mut Rng) -> DMat4 {
 enum Kind {
     Sphere,
     Ellipsoid,
+    /// An ellipsoid under a keyframed motion (motion blur), hit at one
+    /// instant of its path.
+    MovingEllipsoid,
     Triangle,
     Plane,
     Cube,
@@ -116,6 +120,8 @@ struct Case {
     m: DMat4,
     /// Triangle: the vertices; plane: a point and the normal.
     pts: Vec<DVec3>,
+    /// The instant of every ray (a moving shape's `m` is its pose then).
+    time: f32,
 }
 
 fn node(shape: Shape) -> Node {
@@ -180,6 +186,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
                 m: DMat4::from_translation(c.as_dvec3())
                     * DMat4::from_scale(DVec3::splat(rad as f64)),
                 pts: vec![],
+                time: 0.0,
             }
         }
         Kind::Ellipsoid | Kind::Cube => {
@@ -204,6 +211,41 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
                 node: xf(m, node(shape)),
                 m,
                 pts: vec![],
+                time: 0.0,
+            }
+        }
+        Kind::MovingEllipsoid => {
+            // Two poses a few sizes apart, turned and squashed differently;
+            // the rays live at one instant between them.
+            let key = |r: &mut Rng, time: f32| Keyframe {
+                time,
+                translation: f32v(pos + r.unit() * size * r.range(0.0, 3.0)),
+                rotation: glam::DQuat::from_axis_angle(r.unit(), r.range(0.0, 6.0)).as_quat(),
+                scale: f32v(DVec3::new(
+                    size * r.range(0.3, 3.0),
+                    size * r.range(0.3, 3.0),
+                    size * r.range(0.3, 3.0),
+                )),
+            };
+            let motion = Motion::new(vec![key(r, 0.0), key(r, 1.0)]).expect("increasing times");
+            let time = r.f() as f32;
+            // The pose glint interpolates (in f32), as an exact matrix.
+            let (t, q, s) = motion.pose(time);
+            let m =
+                DMat4::from_scale_rotation_translation(s.as_dvec3(), q.as_dquat(), t.as_dvec3());
+            let sphere = node(Shape::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+            });
+            Case {
+                kind,
+                node: Node::Moving {
+                    motion: Arc::new(motion),
+                    child: Box::new(sphere),
+                },
+                m,
+                pts: vec![],
+                time,
             }
         }
         Kind::Triangle => {
@@ -225,6 +267,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
                         node: node(Shape::Triangle(v)),
                         m: DMat4::IDENTITY,
                         pts: d.to_vec(),
+                        time: 0.0,
                     };
                 }
             }
@@ -244,6 +287,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
                     nd / len,
                     DVec3::splat(size),
                 ],
+                time: 0.0,
             }
         }
     }
@@ -269,7 +313,7 @@ fn scene(root: Node) -> Scene {
 /// for open shapes, some) normal.
 fn surface_point(r: &mut Rng, c: &Case) -> (DVec3, DVec3) {
     match c.kind {
-        Kind::Sphere | Kind::Ellipsoid => {
+        Kind::Sphere | Kind::Ellipsoid | Kind::MovingEllipsoid => {
             let u = r.unit();
             let n = c.m.inverse().transpose().transform_vector3(u).normalize();
             (c.m.transform_point3(u), n)
@@ -304,7 +348,10 @@ fn surface_point(r: &mut Rng, c: &Case) -> (DVec3, DVec3) {
 }
 
 fn closed(kind: Kind) -> bool {
-    matches!(kind, Kind::Sphere | Kind::Ellipsoid | Kind::Cube)
+    matches!(
+        kind,
+        Kind::Sphere | Kind::Ellipsoid | Kind::MovingEllipsoid | Kind::Cube
+    )
 }
 
 /// The exact (f64) parameters where `ray` crosses the unit sphere / unit
@@ -314,7 +361,7 @@ fn exact_span(c: &Case, ray: &Ray) -> Option<(f64, f64)> {
     let o = inv.transform_point3(ray.origin.as_dvec3());
     let d = inv.transform_vector3(ray.dir.as_dvec3());
     match c.kind {
-        Kind::Sphere | Kind::Ellipsoid => {
+        Kind::Sphere | Kind::Ellipsoid | Kind::MovingEllipsoid => {
             let a = d.dot(d);
             let b = o.dot(d);
             let perp = o - d * (b / a);
@@ -378,7 +425,7 @@ fn check_case(r: &mut Rng, c: &Case, world: &World, shots: usize, t: &mut Tally)
         } else {
             origin
         };
-        let ray = Ray::new(f32v(origin), f32v(p - origin));
+        let ray = Ray::new(f32v(origin), f32v(p - origin)).at_time(c.time);
         let Some(h) = world.intersect(&ray, 0.0, f32::INFINITY, &mut counters) else {
             continue; // a grazing ray may miss: nothing to spawn from
         };
@@ -393,7 +440,7 @@ fn check_case(r: &mut Rng, c: &Case, world: &World, shots: usize, t: &mut Tally)
                 d = (tangent + nn * lift).normalize_or(nn);
             }
             let dir = f32v(d);
-            let spawned = h.spawn_ray(dir);
+            let spawned = h.spawn_ray(dir).at_time(c.time);
             let again = world.intersect(&spawned, 0.0, f32::INFINITY, &mut counters);
             // Into the inside of a closed shape (the normal is outward), or not.
             let into = closed(c.kind) && dir.dot(h.normal) < 0.0;
@@ -518,7 +565,7 @@ fn run(kind: Kind, flatten: bool, seed: u64) {
     if closed(kind) {
         assert!(t.into > 5000 && t.away > 5000);
     }
-    if matches!(kind, Kind::Sphere | Kind::Ellipsoid) {
+    if matches!(kind, Kind::Sphere | Kind::Ellipsoid | Kind::MovingEllipsoid) {
         assert!(
             t.far_checked > 3000,
             "only {} far sides checked",
@@ -542,6 +589,11 @@ fn spheres() {
 #[test]
 fn ellipsoids_kept_transformed() {
     run(Kind::Ellipsoid, true, 2);
+}
+
+#[test]
+fn moving_ellipsoids() {
+    run(Kind::MovingEllipsoid, true, 8);
 }
 
 #[test]
