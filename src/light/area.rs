@@ -144,6 +144,7 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::testing::{check_error_box, Lcg};
     use glam::DVec3;
 
     /// Mean of the estimator over a fine grid of samples.
@@ -304,37 +305,6 @@ mod tests {
         );
     }
 
-    /// Deterministic values in [0, 1) for the tests below (a 64-bit LCG).
-    fn unit_values(seed: u64) -> impl FnMut() -> f32 {
-        let mut x = seed;
-        move || {
-            x = x
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (x >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
-
-    /// Checks one sample's error box: non-negative, holding the true point
-    /// `truth` (f64) along the directions `check` (all axes for a quad; the
-    /// plane's normal for a disk, whose in-plane frame is only near
-    /// orthonormal), and no looser than `limit` per axis.
-    fn check_box(at: SurfacePoint, truth: DVec3, check: Option<DVec3>, limit: Vec3, what: &str) {
-        let (p, e) = (at.p.as_dvec3(), at.error.as_dvec3());
-        assert!(at.error.min_element() >= 0.0, "{what}: {e}");
-        match check {
-            None => {
-                let off = (p - truth).abs();
-                assert!(off.cmple(e).all(), "{what}: off {off}, box {e}");
-            }
-            Some(n) => {
-                let off = (p - truth).dot(n).abs();
-                assert!(off <= e.dot(n.abs()), "{what}: off {off}, box {e}");
-            }
-        }
-        assert!(at.error.cmple(limit).all(), "{what}: box {e} over {limit}");
-    }
-
     /// A shadow ray's far end is offset out of the sample's error box: a box
     /// too small lets the light's own plane (a ceiling around a ceiling
     /// light) block the ray at some samples, one too large lets occluders
@@ -344,7 +314,8 @@ mod tests {
     /// coordinates' size.
     #[test]
     fn sample_points_lie_in_tight_error_boxes() {
-        let mut r = unit_values(7);
+        let mut g = Lcg(7);
+        let mut r = || g.next();
         let mut v = |scale: f32| Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * 2.0 * scale;
         let g = gamma(12);
         for i in 0..4000 {
@@ -362,7 +333,7 @@ mod tests {
                 let truth =
                     corner.as_dvec3() + u.x as f64 * e1.as_dvec3() + u.y as f64 * e2.as_dvec3();
                 let limit = g * (corner.abs() + e1.abs() + e2.abs());
-                check_box(at, truth, None, limit, &format!("quad {quad:?} at {u}"));
+                check_error_box(at, truth, None, limit, &format!("quad {quad:?} at {u}"));
             }
             let (center, normal) = (v(far), v(1.0));
             let disk = AreaShape::Disk {
@@ -373,7 +344,7 @@ mod tests {
             if let Some(at) = sample(&disk, Vec3::ONE, center + normal * far, u).at {
                 let n = normal.as_dvec3().normalize();
                 let limit = g * (center.abs() + Vec3::splat(size));
-                check_box(
+                check_error_box(
                     at,
                     center.as_dvec3(),
                     Some(n),
@@ -393,7 +364,7 @@ mod tests {
                 let out = (at.p.as_dvec3() - c).try_normalize().unwrap_or(n);
                 let truth = c + out * size as f64;
                 let limit = g * (center.abs() + Vec3::splat(size));
-                check_box(at, truth, Some(n), limit, &format!("{sphere:?} at {u}"));
+                check_error_box(at, truth, Some(n), limit, &format!("{sphere:?} at {u}"));
             }
         }
     }

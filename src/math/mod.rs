@@ -7,6 +7,8 @@ pub mod float;
 mod motion;
 mod ray;
 mod spawn;
+#[cfg(test)]
+pub(crate) mod testing;
 
 pub use aabb::Aabb;
 pub use float::gamma;

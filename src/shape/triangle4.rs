@@ -72,23 +72,9 @@ pub fn may_hit4(r: &WatertightRay, v: &[[Vec4; 3]; 3]) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::testing::Lcg;
     use crate::math::{Ray, Vec3};
     use crate::shape::intersect_triangle;
-
-    /// A small deterministic generator (tests only).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn vec(&mut self, s: f32) -> Vec3 {
-            Vec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
-        }
-    }
 
     fn block(t: &[[Vec3; 3]; 4]) -> [[Vec4; 3]; 3] {
         let mut v = [[Vec4::ZERO; 3]; 3];
