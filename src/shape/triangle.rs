@@ -264,6 +264,8 @@ impl Triangle {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::testing::Lcg;
+    use glam::DVec3;
 
     /// The cheap degeneracy test agrees with `Triangle::new`'s normal on
     /// random, collinear, repeated, tiny, huge and non-finite vertices.
@@ -401,6 +403,89 @@ mod tests {
             t.hit(&r, 0.0, f32::INFINITY)
         );
         assert!(t.hit(&r, 0.0, f32::INFINITY).is_some());
+    }
+
+    /// pbrt's `deltaT` with `tmin = 0`: a hit whose exact `t` (f64, for the
+    /// same f32 vertices and ray) is not positive is never reported, and a
+    /// hit clear of the coordinates' rounding is never rejected. Triangles
+    /// 10⁻³..10³ across, up to 10⁵ from the origin; ray origins on the
+    /// triangle's plane (as far as f32 allows) or off it on either side by
+    /// 10⁻⁹..1 of its size, towards it or away from it.
+    #[test]
+    fn a_hit_at_the_ray_origin_follows_the_sign_of_the_exact_t() {
+        let mut g = Lcg(11);
+        let (mut reported, mut rejected) = (0, 0);
+        for i in 0..200_000 {
+            let size = 10f32.powi(i % 7 - 3);
+            let far = 10f32.powi(i % 6);
+            let centre = g.vec(2.0 * far);
+            let v = [0; 3].map(|_| centre + g.vec(2.0 * size));
+            let d = v.map(|p| p.as_dvec3());
+            let cross = (d[1] - d[0]).cross(d[2] - d[0]);
+            if cross.length() < 0.1 * (size as f64).powi(2) {
+                continue;
+            }
+            let n = cross.normalize();
+            let (u, w) = (0.1 + 0.7 * g.next() as f64, 0.1 + 0.7 * g.next() as f64);
+            let (u, w) = if u + w > 0.9 {
+                (0.9 - w, 0.9 - u)
+            } else {
+                (u, w)
+            };
+            let q = d[0] + u * (d[1] - d[0]) + w * (d[2] - d[0]);
+            let h = match i % 10 {
+                0 => 0.0,
+                k => {
+                    let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                    sign * size as f64 * 10f64.powf(-9.0 * g.next() as f64)
+                }
+            };
+            let o = (q + n * h).as_vec3();
+            let dir = g.vec(2.0);
+            let along = dir.as_dvec3().dot(n);
+            if along.abs() < 0.2 * dir.length() as f64 {
+                continue;
+            }
+            let (od, dd) = (o.as_dvec3(), dir.as_dvec3());
+            let t_exact = n.dot(d[0] - od) / along;
+            let hit = intersect_triangle(
+                &WatertightRay::new(&Ray::new(o, dir)),
+                v[0],
+                v[1],
+                v[2],
+                0.0,
+                f32::INFINITY,
+            );
+            if let Some(hit) = hit {
+                reported += 1;
+                assert!(
+                    t_exact > 0.0,
+                    "{v:?} from {o} along {dir}: t {} but exactly {t_exact}",
+                    hit.t
+                );
+                continue;
+            }
+            // Rejected (or missed): where the exact crossing is well inside,
+            // only a t within rounding of 0 may be rejected.
+            let x = od + t_exact * dd;
+            let bary = |a: DVec3, b: DVec3| (b - a).cross(x - a).dot(n) / cross.length();
+            let inside = [bary(d[1], d[2]), bary(d[2], d[0]), bary(d[0], d[1])];
+            if t_exact > 0.0 && inside.iter().all(|&b| b > 0.02) {
+                // pbrt's bound is conservative: measured up to 2.4·10⁻⁴ of
+                // the coordinates' size (a ray at a slant to a triangle
+                // 10³ across, 10³ from the origin).
+                rejected += 1;
+                let reach = t_exact * dd.length() / (size + far) as f64;
+                assert!(
+                    reach < 1e-3,
+                    "{v:?} from {o} along {dir}: missed at t {t_exact}"
+                );
+            }
+        }
+        assert!(
+            reported > 40_000 && rejected > 10_000,
+            "{reported} {rejected}"
+        );
     }
 
     #[test]
