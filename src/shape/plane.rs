@@ -101,6 +101,7 @@ pub fn project_onto_plane(p: Vec3, n: Vec3, d: f32) -> SurfacePoint {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::testing::{check_error_box, Lcg};
 
     #[test]
     fn offset_is_in_units_of_the_given_normal() {
@@ -164,5 +165,46 @@ mod tests {
             "{dist} vs {}",
             sp.error
         );
+    }
+
+    /// The range is open at both ends: a hit exactly at `tmin` or `tmax` is
+    /// not reported.
+    #[test]
+    fn hits_at_the_ends_of_the_range_are_excluded() {
+        let p = Plane::new(Vec3::Y, 1.0).unwrap();
+        let r = Ray::new(Vec3::new(0.0, 5.0, 0.0), Vec3::NEG_Y);
+        assert_eq!(p.intersect(&r, 0.0, 4.0), None);
+        assert_eq!(p.intersect(&r, 4.0, 10.0), None);
+        assert_eq!(p.intersect(&r, 3.5, 4.5), Some(4.0));
+    }
+
+    /// `project_onto_plane`'s box holds the exact projection (f64) along the
+    /// normal and is within a few roundings of the coordinates' size, for
+    /// planes up to 10⁵ from the origin and points on them or up to 10⁵ off
+    /// them (a triangle's fallback, a disk light's samples).
+    #[test]
+    fn projections_lie_in_tight_error_boxes() {
+        let mut g = Lcg(3);
+        for i in 0..20_000 {
+            let far = 10f32.powi(i % 6);
+            let Some(plane) = Plane::new(g.vec(2.0), g.next() * far) else {
+                continue;
+            };
+            let off = if i % 3 == 0 {
+                0.0
+            } else {
+                10f32.powi(i % 11 - 5)
+            };
+            let p = g.vec(2.0 * far) + g.vec(2.0) * off;
+            let (n, d) = (plane.normal, plane.offset);
+            let sp = project_onto_plane(p, n, d);
+            // The exact projection onto {x : n·x = d} for the stored (f32,
+            // not exactly unit) n.
+            let (nd, pd) = (n.as_dvec3(), p.as_dvec3());
+            let truth = pd - nd * ((nd.dot(pd) - d as f64) / nd.length_squared());
+            let limit = gamma(16) * (sp.p.abs() + Vec3::splat(p.abs().element_sum() + d.abs()));
+            let what = format!("{plane:?} from {p}");
+            check_error_box(sp, truth, Some(nd.normalize()), limit, &what);
+        }
     }
 }
