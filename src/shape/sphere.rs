@@ -75,6 +75,7 @@ impl Sphere {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::testing::Lcg;
 
     fn unit() -> Sphere {
         Sphere {
@@ -160,5 +161,60 @@ mod tests {
         assert!(d.abs() <= sp.error.length() as f64, "{d} vs {}", sp.error);
         assert!(sp.error.max_element() > 0.0);
         assert!((sp.n.length() - 1.0).abs() < 1e-6);
+    }
+
+    /// The surface point's box holds the exact sphere along the normal and
+    /// is within a few roundings of the coordinates' size, for spheres
+    /// 10⁻³..10³ across and 10⁻³..10⁵ from the origin, hit from outside and
+    /// from inside; the normal is the exact outward one.
+    #[test]
+    fn surface_points_lie_in_tight_error_boxes() {
+        let mut g = Lcg(5);
+        let mut checked = 0;
+        for i in 0..20_000 {
+            let radius = 10f32.powi(i % 7 - 3);
+            let far = 10f32.powi(i % 9 - 3);
+            let s = Sphere {
+                center: g.vec(2.0 * far),
+                radius,
+            };
+            let target = s.center + g.vec(radius);
+            let (from, dir) = if i % 3 == 0 {
+                (target, g.vec(2.0))
+            } else {
+                let from = s.center + g.vec(2.0).normalize_or(Vec3::X) * radius * 3.0;
+                (from, target - from)
+            };
+            let r = Ray::new(from, dir);
+            let Some(t) = s.intersect(&r, 0.0, f32::INFINITY) else {
+                continue;
+            };
+            let sp = s.surface(&r, t);
+            // The box meets the exact sphere: the nearest point of the box
+            // is no farther from the centre than the radius, the farthest
+            // corner no nearer (exact for any box, even one as large as a
+            // sphere below the rounding of its centre).
+            let (c, p, e) = (s.center.as_dvec3(), sp.p.as_dvec3(), sp.error.as_dvec3());
+            let what = format!("{s:?} {r:?}: p {} box {}", sp.p, sp.error);
+            assert!(sp.error.min_element() >= 0.0, "{what}");
+            let near = (c.clamp(p - e, p + e) - c).length();
+            let far = (p - c).abs() + e;
+            let rad = radius as f64;
+            assert!(near <= rad && far.length() >= rad, "{what}: {near} {far}");
+            let limit = gamma(8) * (s.center.abs() + Vec3::splat(radius));
+            assert!(sp.error.cmple(limit).all(), "{what}: over {limit}");
+            // The normal is the outward one, where f32 resolves the sphere
+            // (a radius of a thousand ulps of the centre or more).
+            if radius > 1e-4 * s.center.abs().max_element() {
+                let out = (p - c).normalize();
+                assert!(
+                    (sp.n.as_dvec3() - out).length() < 1e-3,
+                    "{what}: n {}",
+                    sp.n
+                );
+            }
+            checked += 1;
+        }
+        assert!(checked > 15_000, "{checked}");
     }
 }
