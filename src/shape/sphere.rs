@@ -217,4 +217,16 @@ mod tests {
         }
         assert!(checked > 15_000, "{checked}");
     }
+
+    /// The range is open at both ends: a root exactly at `tmin` or `tmax` is
+    /// not reported (the next one is, if it is inside).
+    #[test]
+    fn roots_at_the_ends_of_the_range_are_excluded() {
+        let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
+        let s = unit();
+        assert_eq!(s.intersect(&r, 4.0, f32::INFINITY), Some(6.0));
+        assert_eq!(s.intersect(&r, 4.0, 6.0), None);
+        assert_eq!(s.intersect(&r, 0.0, 4.0), None);
+        assert_eq!(s.intersect(&r, 0.0, 6.0), Some(4.0));
+    }
 }
