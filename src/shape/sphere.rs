@@ -228,5 +228,22 @@ mod tests {
         assert_eq!(s.intersect(&r, 4.0, 6.0), None);
         assert_eq!(s.intersect(&r, 0.0, 4.0), None);
         assert_eq!(s.intersect(&r, 0.0, 6.0), Some(4.0));
+        assert_eq!(s.intersect(&r, 6.0, f32::INFINITY), None);
+    }
+
+    /// A sphere of radius 0 hit through its centre (the one ray that can
+    /// hit it) gives its centre, not a NaN point.
+    #[test]
+    fn a_point_sphere_hit_at_its_centre_is_finite() {
+        let s = Sphere {
+            center: Vec3::new(1.0, 2.0, 3.0),
+            radius: 0.0,
+        };
+        let r = Ray::new(Vec3::new(1.0, 2.0, -2.0), Vec3::Z);
+        let t = s.intersect(&r, 0.0, f32::INFINITY).unwrap();
+        assert_eq!(t, 5.0);
+        let sp = s.surface(&r, t);
+        assert_eq!(sp.p, s.center);
+        assert!(sp.error.is_finite() && sp.n.is_finite());
     }
 }
