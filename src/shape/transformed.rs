@@ -236,4 +236,19 @@ mod tests {
         }
         assert!(checked > 50);
     }
+
+    /// A matrix that does not fit in f32, or whose inverse does not, is
+    /// rejected (the shape would be drawn through infinities); a matrix of
+    /// extreme but representable scales is kept.
+    #[test]
+    fn matrices_beyond_f32_are_rejected() {
+        let s = Shape::Sphere(Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        });
+        let scale = |x, y| DMat4::from_scale(glam::DVec3::new(x, y, 1.0));
+        assert!(Transformed::from_f64(s.clone(), scale(1e39, 1.0)).is_none());
+        assert!(Transformed::from_f64(s.clone(), scale(1e-39, 1e30)).is_none());
+        assert!(Transformed::from_f64(s, scale(1e-20, 1e20)).is_some());
+    }
 }
