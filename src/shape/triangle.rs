@@ -350,6 +350,31 @@ mod tests {
         assert!((t.unwrap() + 1.0).abs() < 1e-6);
     }
 
+    /// Edges and vertices belong to the triangle: a ray exactly through a
+    /// point of any edge, or through a vertex, hits it, from either side
+    /// (the edge function is exactly 0 there; two triangles sharing the edge
+    /// both report the hit), for either winding (the other edge functions
+    /// positive, or negative).
+    #[test]
+    fn rays_exactly_through_edges_and_vertices_hit() {
+        let points = [
+            Vec3::new(0.5, 0.5, 0.0), // edge p1–p2 (e0 = 0)
+            Vec3::new(0.0, 0.5, 0.0), // edge p2–p0 (e1 = 0)
+            Vec3::new(0.5, 0.0, 0.0), // edge p0–p1 (e2 = 0)
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::Y,
+        ];
+        let windings = [tri(), Triangle::new(Vec3::ZERO, Vec3::Y, Vec3::X)];
+        for (t, p) in windings.iter().flat_map(|t| points.map(|p| (t, p))) {
+            for dir in [Vec3::NEG_Z, Vec3::Z] {
+                let r = Ray::new(p - dir, dir);
+                let h = t.hit(&r, 0.0, f32::INFINITY);
+                assert_eq!(h.map(|h| h.t), Some(1.0), "{t:?}: {p} along {dir}");
+            }
+        }
+    }
+
     #[test]
     fn edge_on_ray_misses() {
         let r = Ray::new(Vec3::new(-1.0, 0.25, 0.0), Vec3::X);
