@@ -375,6 +375,16 @@ mod tests {
         }
     }
 
+    /// The range is open at both ends: a hit exactly at `tmin` or `tmax` is
+    /// not reported.
+    #[test]
+    fn hits_at_the_ends_of_the_range_are_excluded() {
+        let r = Ray::new(Vec3::new(0.25, 0.25, 1.0), Vec3::NEG_Z);
+        assert_eq!(tri().intersect(&r, 0.5, 1.5), Some(1.0));
+        assert_eq!(tri().intersect(&r, 1.0, 2.0), None);
+        assert_eq!(tri().intersect(&r, 0.0, 1.0), None);
+    }
+
     #[test]
     fn edge_on_ray_misses() {
         let r = Ray::new(Vec3::new(-1.0, 0.25, 0.0), Vec3::X);
