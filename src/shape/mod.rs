@@ -20,7 +20,7 @@ pub use transformed::Transformed;
 pub use triangle::{
     intersect_triangle, is_degenerate_triangle, Triangle, TriangleHit, WatertightRay,
 };
-pub use triangle4::may_hit4;
+pub use triangle4::{may_hit4, WatertightRay4};
 
 use crate::math::{Aabb, Ray, SurfacePoint};
 

@@ -33,20 +33,48 @@
 use super::triangle::WatertightRay;
 use crate::math::Vec4;
 
+/// The per-ray constants of [`may_hit4`]: the permuted origin and the shear,
+/// each splatted to four lanes. Made once per ray (a traversal tests many
+/// blocks with one ray), so that a block's test starts with its vertices.
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightRay4 {
+    /// The permutation of [`WatertightRay`].
+    k: [usize; 3],
+    /// The origin's permuted coordinates `[o[kx], o[ky], o[kz]]`, splatted.
+    o: [Vec4; 3],
+    /// The shear's x and y, splatted.
+    sx: Vec4,
+    sy: Vec4,
+}
+
+impl WatertightRay4 {
+    /// The splatted constants of `r`.
+    #[inline(always)]
+    pub fn new(r: &WatertightRay) -> Self {
+        let [kx, ky, kz] = r.k;
+        WatertightRay4 {
+            k: r.k,
+            o: [
+                Vec4::splat(r.origin[kx]),
+                Vec4::splat(r.origin[ky]),
+                Vec4::splat(r.origin[kz]),
+            ],
+            sx: Vec4::splat(r.shear.x),
+            sy: Vec4::splat(r.shear.y),
+        }
+    }
+}
+
 /// The lanes (bit `i` for lane `i`) of four triangles that the exact
 /// watertight test might hit, ignoring the `t` range: every lane on which
 /// [`intersect_triangle`](super::intersect_triangle) returns a hit, for any
 /// `tmin`/`tmax`, is in the mask. `v[k][a]` is coordinate `a` of vertex `k`,
-/// one lane per triangle.
+/// one lane per triangle; `r` is [`WatertightRay4::new`] of the ray's
+/// [`WatertightRay`].
 #[inline(always)]
-pub fn may_hit4(r: &WatertightRay, v: &[[Vec4; 3]; 3]) -> u32 {
+pub fn may_hit4(r: &WatertightRay4, v: &[[Vec4; 3]; 3]) -> u32 {
     let [kx, ky, kz] = r.k;
-    let o = [
-        Vec4::splat(r.origin[kx]),
-        Vec4::splat(r.origin[ky]),
-        Vec4::splat(r.origin[kz]),
-    ];
-    let (sx, sy) = (Vec4::splat(r.shear.x), Vec4::splat(r.shear.y));
+    let (o, sx, sy) = (&r.o, r.sx, r.sy);
     // `WatertightRay::transform`, lane-wise: the same f32 operations.
     let ray_space = |p: &[Vec4; 3]| {
         let (qx, qy, qz) = (p[kx] - o[0], p[ky] - o[1], p[kz] - o[2]);
@@ -91,7 +119,7 @@ mod tests {
     /// Checks the filter's promise on one ray and block of four triangles.
     fn check(ray: &Ray, tris: &[[Vec3; 3]; 4]) -> (usize, usize) {
         let w = WatertightRay::new(ray);
-        let mask = may_hit4(&w, &block(tris));
+        let mask = may_hit4(&WatertightRay4::new(&w), &block(tris));
         let mut hits = 0;
         for (lane, [p0, p1, p2]) in tris.iter().enumerate() {
             let hit = intersect_triangle(&w, *p0, *p1, *p2, f32::NEG_INFINITY, f32::INFINITY);
@@ -170,7 +198,7 @@ mod tests {
     fn nan_and_overflow_lanes_are_kept() {
         let w = WatertightRay::new(&Ray::new(Vec3::ZERO, Vec3::Z));
         let v = [[Vec4::NAN; 3]; 3];
-        assert_eq!(may_hit4(&w, &v), 0xf);
+        assert_eq!(may_hit4(&WatertightRay4::new(&w), &v), 0xf);
         let big = Vec3::splat(f32::MAX);
         let tris = [[big, -big, Vec3::new(f32::MAX, -f32::MAX, 1.0)]; 4];
         check(&Ray::new(Vec3::ZERO, Vec3::Z), &tris);

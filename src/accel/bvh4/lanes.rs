@@ -46,6 +46,13 @@ impl Lanes {
         Lanes([self.0[0].min(o.0[0]), self.0[1].min(o.0[1])])
     }
 
+    /// The eight lanes as an array (cheap to index by a run-time lane).
+    #[inline(always)]
+    pub fn to_array(self) -> [f32; W] {
+        let (a, b) = (self.0[0].to_array(), self.0[1].to_array());
+        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+    }
+
     /// Bit `i` set where `self[i] <= o[i]`.
     #[inline(always)]
     pub fn le_mask(self, o: Lanes) -> u32 {
@@ -96,5 +103,7 @@ mod tests {
         assert!(mn[1].is_nan());
         assert_eq!((mn[2], mn[4], mn[5], mn[6]), (1.0, 0.0, 5.0, -2.0));
         assert_eq!(a.le_mask(b), 0b1011_0000);
+        let x = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0];
+        assert_eq!(lanes(x).to_array(), x);
     }
 }

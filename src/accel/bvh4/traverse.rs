@@ -4,7 +4,7 @@
 use super::lanes::{Lanes, W};
 use super::node::{is_leaf, leaf_range, prefetch, Node, Tri4, EMPTY, NO_ITEM, OTHER};
 use crate::math::{Ray, Vec3};
-use crate::shape::{intersect_triangle, may_hit4, WatertightRay};
+use crate::shape::{intersect_triangle, may_hit4, WatertightRay, WatertightRay4};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
@@ -49,6 +49,8 @@ pub(crate) struct RayData {
     far: [usize; 3],
     /// The watertight test's per-ray permutation and shear.
     wt: WatertightRay,
+    /// The same, splatted for the four-lane pre-test.
+    wt4: WatertightRay4,
 }
 
 impl RayData {
@@ -60,6 +62,7 @@ impl RayData {
         // for `d = −∞` (`−0`), as `inv < 0 || (inv == 0 && d < 0)` was; a NaN
         // direction makes every slab NaN, whichever plane is near.
         let neg = |a: usize| usize::from(inv[a].is_sign_negative());
+        let wt = WatertightRay::new(ray);
         RayData {
             ray: *ray,
             org: [Lanes::splat(o.x), Lanes::splat(o.y), Lanes::splat(o.z)],
@@ -70,7 +73,8 @@ impl RayData {
             ],
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
-            wt: WatertightRay::new(ray),
+            wt,
+            wt4: WatertightRay4::new(&wt),
         }
     }
 
@@ -154,11 +158,13 @@ impl RayData {
     /// the test for them (the any-hit walk ignores them; they are dead code
     /// there once inlined).
     #[inline(always)]
-    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, Vec4, [[f32; 3]; 4]) {
+    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, [f32; 4], [[f32; 3]; 4]) {
         let mut mask = 0;
-        let mut t = Vec4::ZERO;
+        // Arrays, not a `Vec4`: a `Vec4` indexed by a run-time lane compiles
+        // to a jump table.
+        let mut t = [0.0; 4];
         let mut bary = [[0.0; 3]; 4];
-        let mut todo = may_hit4(&self.wt, &b.v) & triangle_lanes(b);
+        let mut todo = may_hit4(&self.wt4, &b.v) & triangle_lanes(b);
         while todo != 0 {
             let lane = todo.trailing_zeros() as usize;
             todo &= todo - 1;
@@ -250,6 +256,9 @@ fn prefetch_children(nodes: &[Node], tris: &[Tri4], node: &Node, mut mask: u32) 
 /// in order of distance.
 #[inline(always)]
 fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: &mut usize) -> u32 {
+    // An array, not `Lanes` indexing: a `Vec4` indexed by a run-time lane
+    // compiles to a jump table.
+    let dist = dist.to_array();
     let mut kids = [(0u32, 0f32); W];
     let mut k = 0;
     while mask != 0 {
