@@ -259,6 +259,21 @@ fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: 
     // An array, not `Lanes` indexing: a `Vec4` indexed by a run-time lane
     // compiles to a jump table.
     let dist = dist.to_array();
+    let second = mask & (mask - 1);
+    if second & (second - 1) == 0 {
+        // Exactly two, the usual case: one compare. The same order as the
+        // sort below (on a tie the higher slot is visited first), so the
+        // walk is the same.
+        let (i, j) = (
+            mask.trailing_zeros() as usize,
+            second.trailing_zeros() as usize,
+        );
+        let (a, b) = ((node.child[i], dist[i]), (node.child[j], dist[j]));
+        let (near, far) = if a.1 < b.1 { (a, b) } else { (b, a) };
+        stack[*sp] = far;
+        *sp += 1;
+        return near.0;
+    }
     let mut kids = [(0u32, 0f32); W];
     let mut k = 0;
     while mask != 0 {
