@@ -49,8 +49,6 @@ pub(crate) struct RayData {
     far: [usize; 3],
     /// The watertight test's per-ray permutation and shear.
     wt: WatertightRay,
-    /// The same, splatted for the four-lane pre-test.
-    wt4: WatertightRay4,
 }
 
 impl RayData {
@@ -62,7 +60,6 @@ impl RayData {
         // for `d = −∞` (`−0`), as `inv < 0 || (inv == 0 && d < 0)` was; a NaN
         // direction makes every slab NaN, whichever plane is near.
         let neg = |a: usize| usize::from(inv[a].is_sign_negative());
-        let wt = WatertightRay::new(ray);
         RayData {
             ray: *ray,
             org: [Lanes::splat(o.x), Lanes::splat(o.y), Lanes::splat(o.z)],
@@ -73,8 +70,7 @@ impl RayData {
             ],
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
-            wt,
-            wt4: WatertightRay4::new(&wt),
+            wt: WatertightRay::new(ray),
         }
     }
 
@@ -158,13 +154,19 @@ impl RayData {
     /// the test for them (the any-hit walk ignores them; they are dead code
     /// there once inlined).
     #[inline(always)]
-    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, [f32; 4], [[f32; 3]; 4]) {
+    fn triangles(
+        &self,
+        w4: &WatertightRay4,
+        b: &Tri4,
+        tmin: f32,
+        tmax: f32,
+    ) -> (u32, [f32; 4], [[f32; 3]; 4]) {
         let mut mask = 0;
         // Arrays, not a `Vec4`: a `Vec4` indexed by a run-time lane compiles
         // to a jump table.
         let mut t = [0.0; 4];
         let mut bary = [[0.0; 3]; 4];
-        let mut todo = may_hit4(&self.wt4, &b.v) & triangle_lanes(b);
+        let mut todo = may_hit4(w4, &b.v) & triangle_lanes(b);
         while todo != 0 {
             let lane = todo.trailing_zeros() as usize;
             todo &= todo - 1;
@@ -330,6 +332,9 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
     let tmin4 = Lanes::splat(tmin);
     let mut stack = [(0u32, 0f32); N];
     let mut sp = 0usize;
+    // The pre-test's splatted ray, made at the first leaf: many rays (shadow
+    // rays from the floor, camera rays past the mesh) never reach one.
+    let mut w4 = None;
     let mut cur = 0u32;
     loop {
         if !is_leaf(cur) {
@@ -349,11 +354,12 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
             }
         } else if cur != EMPTY {
             let (start, count) = leaf_range(cur);
+            let w4 = &*w4.get_or_insert_with(|| WatertightRay4::new(&rd.wt));
             for b in &tris[start..start + count] {
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                let (mut mask, t, bary) = rd.triangles(b, tmin, tmax);
+                let (mut mask, t, bary) = rd.triangles(w4, b, tmin, tmax);
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -416,6 +422,8 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
     let (tmin4, tmax4) = (Lanes::splat(tmin), Lanes::splat(tmax));
     let mut stack = [0u32; N];
     let mut sp = 0usize;
+    // As in `closest`: made at the first leaf.
+    let mut w4 = None;
     let mut cur = 0u32;
     let hit = 'walk: loop {
         if !is_leaf(cur) {
@@ -442,11 +450,12 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
             }
         } else if cur != EMPTY {
             let (start, count) = leaf_range(cur);
+            let w4 = &*w4.get_or_insert_with(|| WatertightRay4::new(&rd.wt));
             for b in &tris[start..start + count] {
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                if rd.triangles(b, tmin, tmax).0 != 0 {
+                if rd.triangles(w4, b, tmin, tmax).0 != 0 {
                     break 'walk true;
                 }
                 if b.has_other()
