@@ -36,7 +36,8 @@ impl Fallback for TrianglesOnly {
     }
 }
 
-/// Everything a ray needs at every node and leaf, computed once per ray.
+/// Everything a ray needs at every node, computed once per ray (what it
+/// needs at leaves is a [`LeafRay`]).
 pub(crate) struct RayData {
     pub ray: Ray,
     /// Origin, splatted per axis.
@@ -47,8 +48,15 @@ pub(crate) struct RayData {
     /// ray's octant).
     near: [usize; 3],
     far: [usize; 3],
-    /// The watertight test's per-ray permutation and shear.
+}
+
+/// What a ray needs at leaves: the watertight test's permutation and shear,
+/// and the same splatted for the four-lane pre-test. Made at the first leaf
+/// a ray reaches: many rays (shadow rays from the floor, camera rays past
+/// the mesh) never reach one.
+pub(crate) struct LeafRay {
     wt: WatertightRay,
+    w4: WatertightRay4,
 }
 
 impl RayData {
@@ -70,7 +78,6 @@ impl RayData {
             ],
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
-            wt: WatertightRay::new(ray),
         }
     }
 
@@ -141,6 +148,17 @@ impl RayData {
             (mask, std::mem::transmute::<__m256, Lanes>(tn))
         }
     }
+}
+
+impl LeafRay {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let wt = WatertightRay::new(ray);
+        LeafRay {
+            wt,
+            w4: WatertightRay4::new(&wt),
+        }
+    }
 
     /// The watertight test (`shape::triangle::intersect_triangle`) on the
     /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)` and
@@ -154,19 +172,13 @@ impl RayData {
     /// the test for them (the any-hit walk ignores them; they are dead code
     /// there once inlined).
     #[inline(always)]
-    fn triangles(
-        &self,
-        w4: &WatertightRay4,
-        b: &Tri4,
-        tmin: f32,
-        tmax: f32,
-    ) -> (u32, [f32; 4], [[f32; 3]; 4]) {
+    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, [f32; 4], [[f32; 3]; 4]) {
         let mut mask = 0;
         // Arrays, not a `Vec4`: a `Vec4` indexed by a run-time lane compiles
         // to a jump table.
         let mut t = [0.0; 4];
         let mut bary = [[0.0; 3]; 4];
-        let mut todo = may_hit4(w4, &b.v) & triangle_lanes(b);
+        let mut todo = may_hit4(&self.w4, &b.v) & triangle_lanes(b);
         while todo != 0 {
             let lane = todo.trailing_zeros() as usize;
             todo &= todo - 1;
@@ -332,9 +344,8 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
     let tmin4 = Lanes::splat(tmin);
     let mut stack = [(0u32, 0f32); N];
     let mut sp = 0usize;
-    // The pre-test's splatted ray, made at the first leaf: many rays (shadow
-    // rays from the floor, camera rays past the mesh) never reach one.
-    let mut w4 = None;
+    // Made at the first leaf (see `LeafRay`).
+    let mut leaf_ray = None;
     let mut cur = 0u32;
     loop {
         if !is_leaf(cur) {
@@ -354,12 +365,12 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
             }
         } else if cur != EMPTY {
             let (start, count) = leaf_range(cur);
-            let w4 = &*w4.get_or_insert_with(|| WatertightRay4::new(&rd.wt));
+            let lr = &*leaf_ray.get_or_insert_with(|| LeafRay::new(&rd.ray));
             for b in &tris[start..start + count] {
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                let (mut mask, t, bary) = rd.triangles(w4, b, tmin, tmax);
+                let (mut mask, t, bary) = lr.triangles(b, tmin, tmax);
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -422,8 +433,8 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
     let (tmin4, tmax4) = (Lanes::splat(tmin), Lanes::splat(tmax));
     let mut stack = [0u32; N];
     let mut sp = 0usize;
-    // As in `closest`: made at the first leaf.
-    let mut w4 = None;
+    // Made at the first leaf (see `LeafRay`).
+    let mut leaf_ray = None;
     let mut cur = 0u32;
     let hit = 'walk: loop {
         if !is_leaf(cur) {
@@ -450,12 +461,12 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
             }
         } else if cur != EMPTY {
             let (start, count) = leaf_range(cur);
-            let w4 = &*w4.get_or_insert_with(|| WatertightRay4::new(&rd.wt));
+            let lr = &*leaf_ray.get_or_insert_with(|| LeafRay::new(&rd.ray));
             for b in &tris[start..start + count] {
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                if rd.triangles(w4, b, tmin, tmax).0 != 0 {
+                if lr.triangles(b, tmin, tmax).0 != 0 {
                     break 'walk true;
                 }
                 if b.has_other()
