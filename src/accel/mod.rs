@@ -105,6 +105,23 @@ pub trait Aggregate: Send + Sync {
         counters: &mut Counters,
     ) -> bool;
 
+    /// [`occluded`](Self::occluded) for a ray that primitive `except`
+    /// cannot block (a flat primitive the ray leaves: see
+    /// `World::occluded_leaving`), so an aggregate may skip testing it. The
+    /// default tests it anyway, which gives the same answer.
+    fn occluded_except(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        except: u32,
+        counters: &mut Counters,
+    ) -> bool {
+        let _ = except;
+        self.occluded(prims, ray, tmin, tmax, counters)
+    }
+
     /// Bounds of everything inside.
     fn bounds(&self) -> Aabb;
 

@@ -151,7 +151,7 @@ impl Whitted {
             }
         }
         // The lights' shadow rays share their offset origins (`Spawn`).
-        let from = &mut Spawn::new(hit.surface_point());
+        let from = &mut Spawn::leaving(hit.surface_point(), hit.prim);
         for (i, light) in world.lights.iter().enumerate() {
             if !is_delta(light) {
                 color += self.area_light(world, ray, from, light, &m, n, d, depth, stream, c, obs);
@@ -349,7 +349,7 @@ impl Whitted {
         super::count_ray(c, RayKind::Shadow);
         if !self.transparent_shadows {
             let (shadow, tmax) = target.ray_from(from, time);
-            let blocked = world.occluded(&shadow, 0.0, tmax, c);
+            let blocked = world.occluded_leaving(&shadow, 0.0, tmax, from.leaving, c);
             obs.shadow(&shadow, tmax, blocked, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }

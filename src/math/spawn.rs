@@ -18,6 +18,9 @@ use super::{Ray, SurfacePoint, Vec3};
 pub struct Spawn {
     /// The point rays leave.
     pub from: SurfacePoint,
+    /// The primitive (its index in the world) `from` lies on, when known:
+    /// a flat one cannot block the rays leaving it (`World::occluded_leaving`).
+    pub leaving: Option<u32>,
     /// Origins for directions with `w·n >= 0` (or NaN) and with `w·n < 0`.
     origins: [Option<Vec3>; 2],
 }
@@ -28,7 +31,17 @@ impl Spawn {
     pub fn new(from: SurfacePoint) -> Self {
         Self {
             from,
+            leaving: None,
             origins: [None; 2],
+        }
+    }
+
+    /// Rays from `from`, a point of primitive `prim`.
+    #[inline]
+    pub fn leaving(from: SurfacePoint, prim: u32) -> Self {
+        Self {
+            leaving: Some(prim),
+            ..Self::new(from)
         }
     }
 

@@ -145,13 +145,51 @@ impl World {
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
     pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> bool {
+        self.unbounded_occludes(ray, tmin, tmax, c)
+            || self.accel.occluded(&self.prims, ray, tmin, tmax, c)
+    }
+
+    /// Whether an unbounded primitive (a plane) lies on the ray.
+    fn unbounded_occludes(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> bool {
         self.unbounded.iter().any(|&i| {
             c.intersection_tests += 1;
             self.prims[i as usize]
                 .shape
                 .intersect(ray, tmin, tmax)
                 .is_some()
-        }) || self.accel.occluded(&self.prims, ray, tmin, tmax, c)
+        })
+    }
+
+    /// [`occluded`](Self::occluded) for a ray spawned off primitive `from`
+    /// (a hit's `prim`, see `math::Spawn`). A triangle cannot block a ray
+    /// leaving it: the ray starts at an origin offset past the hit's error
+    /// bounds to the side it goes (`offset_ray_origin`), so the triangle's
+    /// plane lies behind it, and the watertight test rejects every `t`
+    /// within its own error of 0 (`deltaT`). So the accelerator may skip
+    /// that triangle's test (`Aggregate::occluded_except`): the answer is
+    /// `occluded`'s unless `occluded` reported the ray's own triangle,
+    /// which would be shadow acne (`tests/reintersect.rs` checks that
+    /// spawned rays never re-hit their own surface). Curved, moving and
+    /// instanced primitives are tested as usual.
+    pub fn occluded_leaving(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        from: Option<u32>,
+        c: &mut Counters,
+    ) -> bool {
+        let flat = from.filter(|&i| {
+            matches!(
+                self.prims.get(i as usize).map(|p| &p.shape),
+                Some(Shape::Triangle(_))
+            )
+        });
+        let Some(except) = flat else {
+            return self.occluded(ray, tmin, tmax, c);
+        };
+        self.unbounded_occludes(ray, tmin, tmax, c)
+            || (self.accel).occluded_except(&self.prims, ray, tmin, tmax, except, c)
     }
 
     /// A world-space ray in this world's rendering space (the origin moved
