@@ -45,7 +45,8 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     }
 }
 
-/// Any hit (see `traverse::any`), on the best copy for this CPU.
+/// Any hit but triangle `skip` (see `traverse::any`), on the best copy for
+/// this CPU.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
@@ -53,21 +54,23 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     tris: &[Tri4],
     fallback: &F,
     ray: &Ray,
-    tmin: f32,
-    tmax: f32,
+    (tmin, tmax): (f32, f32),
+    skip: u32,
     stats: &mut S,
     deep: bool,
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: as in `closest`: AVX2 is present, checked just above.
-        return unsafe { avx2::any(nodes, tris, fallback, ray, tmin, tmax, stats, deep) };
+        return unsafe { avx2::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep) };
     }
     let rd = &RayData::new(ray);
     if deep {
-        traverse::any::<S, F, _, DEEP>(Portable, nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::any::<S, F, _, DEEP>(Portable, nodes, tris, fallback, rd, tmin, tmax, skip, stats)
     } else {
-        traverse::any::<S, F, _, SHALLOW>(Portable, nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::any::<S, F, _, SHALLOW>(
+            Portable, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
+        )
     }
 }
 
@@ -108,8 +111,8 @@ mod avx2 {
         tris: &[Tri4],
         fallback: &F,
         ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        (tmin, tmax): (f32, f32),
+        skip: u32,
         stats: &mut S,
         deep: bool,
     ) -> bool {
@@ -118,9 +121,11 @@ mod avx2 {
         let avx = unsafe { Avx::new() };
         let rd = &RayData::new(ray);
         if deep {
-            traverse::any::<S, F, _, DEEP>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
+            traverse::any::<S, F, _, DEEP>(avx, nodes, tris, fallback, rd, tmin, tmax, skip, stats)
         } else {
-            traverse::any::<S, F, _, SHALLOW>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
+            traverse::any::<S, F, _, SHALLOW>(
+                avx, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
+            )
         }
     }
 }

@@ -43,7 +43,7 @@ use crate::shape::{is_degenerate_triangle, Shape};
 use crate::stats::{Counters, TraversalStats};
 use build::{Item, Source};
 pub(crate) use node::Node;
-use node::Tri4;
+use node::{Tri4, NO_ITEM};
 
 /// The fast BVH (8-wide nodes; the name predates them) over triangles
 /// (and, through a [`Fallback`], other shapes).
@@ -190,8 +190,23 @@ impl Bvh4 {
         tmax: f32,
         stats: &mut S,
     ) -> bool {
+        self.any_except(fallback, ray, tmin, tmax, NO_ITEM, stats)
+    }
+
+    /// [`any`](Self::any) without testing triangle `skip`, which the caller
+    /// knows cannot block the ray (see `Aggregate::occluded_except`).
+    #[inline]
+    pub(crate) fn any_except<S: TraversalStats, F: Fallback + ?Sized>(
+        &self,
+        fallback: &F,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        skip: u32,
+        stats: &mut S,
+    ) -> bool {
         let (n, t) = (&self.nodes, &self.tris);
-        dispatch::any(n, t, fallback, ray, tmin, tmax, stats, self.deep)
+        dispatch::any(n, t, fallback, ray, (tmin, tmax), skip, stats, self.deep)
     }
 }
 
@@ -229,6 +244,18 @@ impl Aggregate for Bvh4 {
         c: &mut Counters,
     ) -> bool {
         self.any(prims, ray, tmin, tmax, c)
+    }
+
+    fn occluded_except(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        except: u32,
+        c: &mut Counters,
+    ) -> bool {
+        self.any_except(prims, ray, tmin, tmax, except, c)
     }
 
     fn bounds(&self) -> Aabb {
@@ -306,7 +333,7 @@ mod tests {
                 let inf = f32::INFINITY;
                 let c = dispatch::closest(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
                 assert_eq!(c, deep.closest_hit(&prims[..], &r, 0.0, inf, ns));
-                let a = dispatch::any(n, t, &prims[..], &r, 0.0, inf, ns, deep_stack);
+                let a = dispatch::any(n, t, &prims[..], &r, (0.0, inf), NO_ITEM, ns, deep_stack);
                 assert_eq!(a, c.is_some());
             }
         }
@@ -346,6 +373,70 @@ mod tests {
             hits += 1;
         }
         assert!(hits > 100, "{hits}");
+    }
+
+    /// Skipping the triangle a ray leaves changes no answer: shadow rays
+    /// spawned off triangle hits in every direction (most of them start in
+    /// a leaf holding their own triangle) are blocked exactly when `any`
+    /// says so. And the skip is real: a ray through one triangle alone is
+    /// blocked unless that triangle is skipped.
+    #[test]
+    fn skipping_the_triangle_a_ray_leaves_changes_no_answer() {
+        let prims = soup(14, 3000);
+        let b = Bvh4::new(&prims, all(&prims));
+        let ns = &mut crate::stats::NoStats;
+        let inf = f32::INFINITY;
+        let (mut rays, mut blocked) = (0, 0);
+        for i in 0..3000 {
+            let f = i as f32;
+            let o = Vec3::new((f * 0.37).sin(), (f * 0.73).cos(), -9.0);
+            let r = Ray::new(
+                o,
+                Vec3::new((f * 0.11).cos() * 0.3, (f * 0.29).sin() * 0.3, 1.0),
+            );
+            let Some(h) = b.closest_hit(&prims[..], &r, 0.0, inf, ns) else {
+                continue;
+            };
+            let (crate::shape::Shape::Triangle(tr), Some(bary)) =
+                (&prims[h.id as usize].shape, h.bary)
+            else {
+                continue;
+            };
+            let sp = tr.surface_at(bary);
+            for k in 0..16 {
+                let g = (i * 16 + k) as f32;
+                let w = Vec3::new((g * 0.71).sin(), (g * 1.37).cos(), (g * 0.53).sin() - 0.2);
+                let s = sp.spawn_ray(w);
+                let all = b.any(&prims[..], &s, 0.0, inf, ns);
+                assert_eq!(
+                    all,
+                    b.any_except(&prims[..], &s, 0.0, inf, h.id, ns),
+                    "{s:?}"
+                );
+                rays += 1;
+                blocked += usize::from(all);
+            }
+        }
+        eprintln!("{blocked} of {rays} spawned rays blocked");
+        assert!(
+            rays > 5000 && blocked > rays / 20 && blocked < rays,
+            "{blocked} of {rays}"
+        );
+        // One triangle, a ray through its centroid.
+        let one = vec![prims
+            .iter()
+            .find(|p| matches!(p.shape, crate::shape::Shape::Triangle(_)))
+            .unwrap()
+            .clone()];
+        let crate::shape::Shape::Triangle(tr) = &one[0].shape else {
+            unreachable!()
+        };
+        let c = (tr.v[0] + tr.v[1] + tr.v[2]) / 3.0;
+        let s = Ray::new(c - 3.0 * tr.normal, tr.normal);
+        let b1 = Bvh4::new(&one, vec![0]);
+        assert!(b1.any(&one[..], &s, 0.0, inf, ns));
+        assert!(!b1.any_except(&one[..], &s, 0.0, inf, 0, ns));
+        assert!(b1.any_except(&one[..], &s, 0.0, inf, 1, ns));
     }
 
     #[test]

@@ -167,18 +167,27 @@ impl LeafRay {
     /// brute force calls, so results are bit-identical. Unused and
     /// non-triangle lanes (NaN vertices) are skipped by their ids.
     ///
+    /// Lanes holding item `skip` are not tested ([`NO_ITEM`] skips none:
+    /// unused lanes are never tested anyway).
+    ///
     /// The barycentrics of each lane hit come along too: the closest hit
     /// hands them to `Triangle::surface_at`, so the world need not re-run
     /// the test for them (the any-hit walk ignores them; they are dead code
     /// there once inlined).
     #[inline(always)]
-    fn triangles(&self, b: &Tri4, tmin: f32, tmax: f32) -> (u32, [f32; 4], [[f32; 3]; 4]) {
+    fn triangles(
+        &self,
+        b: &Tri4,
+        tmin: f32,
+        tmax: f32,
+        skip: u32,
+    ) -> (u32, [f32; 4], [[f32; 3]; 4]) {
         let mut mask = 0;
         // Arrays, not a `Vec4`: a `Vec4` indexed by a run-time lane compiles
         // to a jump table.
         let mut t = [0.0; 4];
         let mut bary = [[0.0; 3]; 4];
-        let mut todo = may_hit4(&self.w4, &b.v) & triangle_lanes(b);
+        let mut todo = may_hit4(&self.w4, &b.v) & triangle_lanes(b) & !lanes_of(b, skip);
         while todo != 0 {
             let lane = todo.trailing_zeros() as usize;
             todo &= todo - 1;
@@ -246,6 +255,14 @@ fn triangle_lanes(b: &Tri4) -> u32 {
     // has its sign bit clear (one `movmskps`; no arithmetic on the bits).
     const _: () = assert!(OTHER == 1 << 31 && NO_ITEM & OTHER != 0);
     !Vec4::from_array(b.ids.map(f32::from_bits)).is_negative_bitmask() & 0xf
+}
+
+/// The lanes of a block whose id is `id`.
+#[inline(always)]
+fn lanes_of(b: &Tri4, id: u32) -> u32 {
+    glam::UVec4::from_array(b.ids)
+        .cmpeq(glam::UVec4::splat(id))
+        .bitmask()
 }
 
 /// Starts loading the children in `mask` (nodes or first blocks), so that
@@ -370,7 +387,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                let (mut mask, t, bary) = lr.triangles(b, tmin, tmax);
+                let (mut mask, t, bary) = lr.triangles(b, tmin, tmax, NO_ITEM);
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -412,8 +429,10 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
     }
 }
 
-/// Whether anything lies on the ray in `(tmin, tmax)`: stops at the first
-/// hit. Always inlined (see [`closest`]).
+/// Whether anything but triangle `skip` lies on the ray in `(tmin, tmax)`:
+/// stops at the first hit. `skip` is a triangle the caller knows cannot
+/// block the ray (the one it leaves; [`NO_ITEM`] for none): its lanes are
+/// not tested. Always inlined (see [`closest`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
@@ -424,6 +443,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
     rd: &RayData,
     tmin: f32,
     tmax: f32,
+    skip: u32,
     stats: &mut S,
 ) -> bool {
     if nodes.is_empty() {
@@ -466,7 +486,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                if lr.triangles(b, tmin, tmax).0 != 0 {
+                if lr.triangles(b, tmin, tmax, skip).0 != 0 {
                     break 'walk true;
                 }
                 if b.has_other()
