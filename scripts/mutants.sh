@@ -48,6 +48,15 @@ filter_for() {
   echo "(kind(lib) | test(/^($mods)::/)) & not ($slow)"
 }
 
+# In the background (`setsid nice -n 19 scripts/mutants.sh ...`), per-process
+# nice is not enough where the kernel schedules by session group
+# (sched_autogroup): the new session's group keeps nice 0 and takes a full
+# core's share against everything else. A run that leads its own session
+# lowers its group too.
+if [ "$(ps -o sid= -p $$ | tr -d ' ')" = "$$" ] && [ -w /proc/self/autogroup ]; then
+  echo 19 > /proc/self/autogroup 2>/dev/null || true
+fi
+
 export NEXTEST_PROFILE=mutants
 if command -v mold >/dev/null; then
   export RUSTFLAGS="${RUSTFLAGS:-} -C link-arg=-fuse-ld=mold"
