@@ -247,4 +247,55 @@ mod tests {
         assert!(img.pixels.contains(&Vec3::ZERO)); // digits
         assert!(heat(0.3).length() < heat(0.7).length());
     }
+
+    /// Every pixel of a small heat map, from its description: the cells
+    /// enlarged, a white gap, the scale bar, a white gap, and the two
+    /// numbers in the 3x5 font at twice its size (each glyph 6 pixels wide
+    /// in an 8-pixel advance, left-aligned under the bar's start and
+    /// right-aligned under its end), white elsewhere.
+    #[test]
+    fn heat_map_pixels_are_the_described_ones() {
+        let (w, h) = (3u32, 2u32);
+        let counts = [3, 7, 5, 7, 3, 12];
+        let img = heat_map(w, h, &counts);
+        let (lo, hi) = (3u32, 12u32);
+        let s = 86; // ceil(256 / 3)
+        let (mw, mh) = (w * s, h * s);
+        assert_eq!((img.width, img.height), (mw, mh + 4 + 12 + 4 + 14));
+        let text = mh + 20;
+        // Black where the font of `n`, placed from `x0`, covers `(x, row)`.
+        let ink = |n: u32, x0: u32, x: u32, row: u32| {
+            let digits = n.to_string().into_bytes();
+            if x < x0 || row < text || row >= text + 10 {
+                return false;
+            }
+            let (u, r) = (x - x0, ((row - text) / 2) as usize);
+            let (k, within) = ((u / 8) as usize, u % 8);
+            k < digits.len()
+                && within < 6
+                && DIGITS[(digits[k] - b'0') as usize][r] & (4 >> (within / 2)) != 0
+        };
+        let white = Vec3::ONE;
+        for row in 0..img.height {
+            for x in 0..img.width {
+                let want = if row < mh {
+                    let c = counts[(row / s * w + x / s) as usize];
+                    heat((c - lo) as f32 / (hi - lo) as f32)
+                } else if (mh + 4..mh + 16).contains(&row) {
+                    heat(x as f32 / (mw - 1) as f32)
+                } else if ink(lo, 0, x, row) || ink(hi, mw - 16, x, row) {
+                    Vec3::ZERO
+                } else {
+                    white
+                };
+                assert_eq!(
+                    img.pixels[(row * img.width + x) as usize],
+                    want,
+                    "({x}, {row})"
+                );
+            }
+        }
+        // The font itself: "1" is the glyph 2,6,2,2,7 (a serif and a base).
+        assert_eq!(DIGITS[1], [2, 6, 2, 2, 7]);
+    }
 }
