@@ -152,6 +152,24 @@ mod tests {
         assert!((q.offset - 1.0).abs() < 1e-6);
     }
 
+    /// A transform can leave the normal finite and push the offset past
+    /// f32's range (`n·p` is computed in f64 and only then narrowed): that
+    /// plane is refused too, not kept with an infinite offset that makes
+    /// every hit parameter infinite or NaN.
+    #[test]
+    fn a_transform_that_overflows_the_offset_is_refused() {
+        let p = Plane::new(Vec3::Y, 1.0).unwrap();
+        for (shift, kept) in [(1e38, true), (1e39, false), (-1e39, false), (1e300, false)] {
+            let m = DMat4::from_translation(glam::DVec3::new(0.0, shift, 0.0));
+            let q = p.transformed(&m);
+            assert_eq!(q.is_some(), kept, "shift {shift}: {q:?}");
+            if let Some(q) = q {
+                assert_eq!(q.normal, Vec3::Y);
+                assert_eq!(q.offset, (1.0 + shift) as f32);
+            }
+        }
+    }
+
     #[test]
     fn projected_hit_is_on_the_plane_within_its_error() {
         let p = Plane::new(Vec3::new(0.3, 1.0, -0.2), 7.5e3).unwrap();
