@@ -272,4 +272,117 @@ mod tests {
         assert!((spread(&c) - 1.0).abs() < 1e-6); // blue clamped to 1
         assert_eq!(spread(&[Vec3::ONE; 4]), 0.0);
     }
+
+    /// An 8x8 orthographic view, one world unit per pixel, of a lit
+    /// half-plane: a triangle whose edge `axis = 0.3` runs straight through
+    /// one column (`x`) or one row (`y`) of pixels, 0.3 of the way across.
+    fn edge_frame(axis: char, max_depth: u32, threshold: f32) -> (Frame, Counters) {
+        let (far, e) = (100.0, 0.3);
+        let v = |along: f32, across: f32| match axis {
+            'x' => format!("{across} {along} 0"),
+            _ => format!("{along} {across} 0"),
+        };
+        let src = format!(
+            "OrthographicCamera {{ center 0 0 10 direction 0 0 -1 up 0 1 0 size 8 }}
+             Lights {{ numLights 0 }}
+             Background {{ color 0 0 0 ambientLight 1 1 1 }}
+             Materials {{ numMaterials 1 PhongMaterial {{ diffuseColor 1 1 1 }} }}
+             Group {{ numObjects 1 MaterialIndex 0
+               Triangle {{ vertex0 {} vertex1 {} vertex2 {} }} }}",
+            v(-far, e),
+            v(far, e),
+            v(0.0, -far)
+        );
+        let scene = crate::format::parse_scene(&src, std::path::Path::new("edge.txt")).unwrap();
+        let world = World::build(&scene, crate::world::BuildOptions::default());
+        let camera = CameraModel::new(&world.camera);
+        let settings = Settings {
+            adaptive: Some(Adaptive {
+                threshold,
+                max_depth,
+            }),
+            ..Settings::one_ray((8, 8), super::super::PixelOffset::CENTER)
+        };
+        let r = super::super::render_image(
+            &world,
+            &camera,
+            // Both sides lit: the two edges' triangles face opposite ways.
+            &crate::integrator::Whitted {
+                shade_back: true,
+                ..Default::default()
+            },
+            &settings,
+            Control::default(),
+        );
+        (r.frame, r.counters)
+    }
+
+    /// Closed form: the lattice has `s = 2^depth` columns per pixel; the
+    /// subdivision splits exactly the squares the edge crosses, down to one
+    /// lattice step, where a square straddling the edge is worth 1/2. So the
+    /// edge pixel is `(⌊0.3·s⌋ + 1/2)/s` of the lit value (0.5, 0.25, 0.375,
+    /// 0.3125, 0.28125 for depths 0 to 4: exact binary fractions), pixels
+    /// before the edge are lit and pixels past it are background. The edge
+    /// in `x` is in column 4 (x from -4 to 4, left to right); the edge in
+    /// `y` is in row 3 from the top (y = 0.3 is 4.3 rows above the bottom,
+    /// and frame rows count from the top).
+    #[test]
+    fn an_edge_pixel_is_the_lattice_fraction_it_covers() {
+        for depth in 0..=4 {
+            let s = (1u32 << depth) as f32;
+            let want = ((0.3 * s).floor() + 0.5) / s;
+            for axis in ['x', 'y'] {
+                let (f, _) = edge_frame(axis, depth, 0.01);
+                let lit = f.color[7 * 8]; // bottom-left: inside in both cases
+                assert!(lit.min_element() > 0.1, "{lit:?}");
+                for row in 0..8usize {
+                    for col in 0..8usize {
+                        // Position across the edge, in pixels from the edge's pixel.
+                        let k = if axis == 'x' {
+                            col as i32 - 4
+                        } else {
+                            3 - row as i32
+                        };
+                        let expect = match k {
+                            ..=-1 => lit,
+                            0 => lit * want,
+                            _ => Vec3::ZERO,
+                        };
+                        let got = f.color[row * 8 + col];
+                        assert_eq!(
+                            got, expect,
+                            "axis {axis} depth {depth} pixel ({col}, {row})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Where the corners agree nothing is split: 4 points a pixel, its
+    /// corners. The edge pixel at depth 3 (lattice `[0, 8]²`, the edge at
+    /// x = 2.4) splits the whole square (5 new points), then the two squares
+    /// of size 4 in `x ∈ [0, 4]` (9 new: `(2, 4)` is shared), then the four
+    /// of size 2 in `x ∈ [2, 4]` (17 new: three shared), and stops at size 1:
+    /// 4 + 5 + 9 + 17 = 35 points. In one tile, the 8 edge pixels share
+    /// with the pixel above their top edge's 3 new points (x = 2, 3, 4), so
+    /// the camera rays are the 81 corners plus 8 × 31 − 7 × 3 = 308. A
+    /// threshold above every difference splits nothing, and the edge pixel
+    /// is the mean of its corners, 1/2.
+    #[test]
+    fn only_the_squares_the_edge_crosses_are_split() {
+        let (f, c) = edge_frame('x', 3, 0.01);
+        for row in 0..8 {
+            for col in 0..8 {
+                let want = if col == 4 { 35 } else { 4 };
+                assert_eq!(f.samples[row * 8 + col], want, "pixel ({col}, {row})");
+            }
+        }
+        assert_eq!(c.primary, 308);
+        let (f, c) = edge_frame('x', 3, 2.0);
+        assert_eq!(c.primary, 81);
+        assert!(f.samples.iter().all(|&n| n == 4));
+        let lit = f.color[7 * 8];
+        assert_eq!(f.color[7 * 8 + 4], lit * 0.5);
+    }
 }
