@@ -5,6 +5,8 @@
 #   scripts/mutants.sh integrator light     # just these (folders under src/)
 #   scripts/mutants.sh src/light/mod.rs     # or single files
 #   MUTANTS_ARGS="--shard 0/4" scripts/mutants.sh accel   # a quarter of one
+#   MUTANTS_STAGE=unit scripts/mutants.sh render   # unit tests only, then
+#   MUTANTS_ARGS=--iterate scripts/mutants.sh render   # the rest on the misses
 #
 # Needs `cargo install cargo-mutants` and cargo-nextest (and uses the mold
 # linker when it is installed). Not part of CI: every mutant rebuilds the
@@ -35,6 +37,14 @@ common='physics|ray_tree|raytree|reference_images|textures|distribution|sampling
 # One nextest filterset: the unit tests plus the selected modules of the
 # integration-test binary `suite` (tests/main.rs).
 filter_for() {
+  # Stage "unit": the crate's unit tests alone (a few seconds at the
+  # mutants profile). Most mutants fail one of them; a second run with
+  # `--iterate` then gives only the survivors the whole selection below,
+  # instead of every mutant up to a minute of integration tests.
+  if [ "${MUTANTS_STAGE:-}" = unit ]; then
+    echo "kind(lib)"
+    return
+  fi
   local mods=$common slow='test(=reference_images::assignment6_with_every_accelerator)'
   case "$1" in
     accel*|*/accel/*|shape*|*/shape/*) mods="$mods|accel_agree|accel_edges|watertight" ;;
