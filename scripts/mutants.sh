@@ -81,6 +81,10 @@ if ! git diff --quiet -- src; then
   exit 1
 fi
 
+# The unit stage builds the library's tests only, not the suite binary.
+binaries=(--lib --test suite)
+[ "${MUTANTS_STAGE:-}" = unit ] && binaries=(--lib)
+
 for target in "$@"; do
   if [ -f "$target" ]; then
     files=(-f "$target")
@@ -96,7 +100,7 @@ for target in "$@"; do
   # shellcheck disable=SC2086,SC2046
   cargo mutants --in-place --profile mutants --test-tool nextest \
     --timeout "${MUTANTS_TIMEOUT:-240}" ${MUTANTS_ARGS:-} \
-    "${files[@]}" --output "mutants/$name" -- --lib --test suite -E "$(filter_for "$target")" || true
+    "${files[@]}" --output "mutants/$name" -- "${binaries[@]}" -E "$(filter_for "$target")" || true
   for kind in caught missed timeout unviable; do
     f="mutants/$name/mutants.out/$kind.txt"
     printf '%-9s %s\n' "$kind" "$( [ -f "$f" ] && wc -l < "$f" || echo 0)"
