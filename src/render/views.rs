@@ -237,6 +237,54 @@ mod tests {
         assert_eq!(img.pixels[0], Vec3::new(0.0, 0.0, 1.0));
     }
 
+    /// Every pixel of a tent filter's view, from the image coordinates
+    /// alone: blue lines at multiples of the zoom, the weight at each
+    /// sub-pixel's offset from the centre pixel's centre within the support
+    /// (one pixel around the centre for a radius of 1.5), dark blue beyond.
+    #[test]
+    fn filter_view_pixels_are_the_weights_at_their_offsets() {
+        let (w, h, z) = (5u32, 5u32, 4u32);
+        let tent = Filter::Tent(1.5);
+        let img = filter_view(&tent, w, h, z);
+        assert_eq!((img.width, img.height), (21, 21));
+        for y in 0..21u32 {
+            for x in 0..21u32 {
+                let want = if x % z == 0 || y % z == 0 {
+                    Vec3::new(0.0, 0.0, 1.0)
+                } else if (x / z).abs_diff(2) <= 1 && (y / z).abs_diff(2) <= 1 {
+                    let (dx, dy) = (x as f32 / 4.0 - 2.5, y as f32 / 4.0 - 2.5);
+                    Vec3::splat(tent.weight(dx, dy))
+                } else {
+                    Vec3::new(0.0, 0.0, 0.5)
+                };
+                let got = img.pixels[((20 - y) * 21 + x) as usize];
+                assert_eq!(got, want, "({x}, {y}) from the bottom left");
+            }
+        }
+    }
+
+    /// The ramp's stops at t = 0, 1/4, 1/2, 3/4, 1, linear between them,
+    /// clamped outside [0, 1].
+    #[test]
+    fn heat_ramp_passes_through_its_stops() {
+        let near = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+        let cases = [
+            (-1.0, Vec3::ZERO),
+            (0.0, Vec3::ZERO),
+            (0.125, Vec3::new(0.175, 0.025, 0.275)),
+            (0.25, Vec3::new(0.35, 0.05, 0.55)),
+            (0.5, Vec3::new(0.85, 0.2, 0.15)),
+            (0.625, Vec3::new(0.925, 0.525, 0.125)),
+            (0.75, Vec3::new(1.0, 0.85, 0.1)),
+            (0.875, Vec3::new(1.0, 0.925, 0.55)),
+            (1.0, Vec3::ONE),
+            (2.0, Vec3::ONE),
+        ];
+        for (t, want) in cases {
+            assert!(near(heat(t), want), "heat({t}) = {}", heat(t));
+        }
+    }
+
     #[test]
     fn heat_map_has_the_scale_and_both_ends() {
         let counts = [4, 4, 4, 16];
