@@ -241,23 +241,26 @@ mod tests {
     /// alone: blue lines at multiples of the zoom, the weight at each
     /// sub-pixel's offset from the centre pixel's centre within the support
     /// (one pixel around the centre for a radius of 1.5), dark blue beyond.
+    /// A 5x3 image: the centre is (2, 1), and the support reaches the
+    /// bottom and top rows.
     #[test]
     fn filter_view_pixels_are_the_weights_at_their_offsets() {
-        let (w, h, z) = (5u32, 5u32, 4u32);
+        let (w, h, z) = (5u32, 3u32, 4u32);
         let tent = Filter::Tent(1.5);
         let img = filter_view(&tent, w, h, z);
-        assert_eq!((img.width, img.height), (21, 21));
-        for y in 0..21u32 {
-            for x in 0..21u32 {
+        let (iw, ih) = (w * z + 1, h * z + 1);
+        assert_eq!((img.width, img.height), (iw, ih));
+        for y in 0..ih {
+            for x in 0..iw {
                 let want = if x % z == 0 || y % z == 0 {
                     Vec3::new(0.0, 0.0, 1.0)
-                } else if (x / z).abs_diff(2) <= 1 && (y / z).abs_diff(2) <= 1 {
-                    let (dx, dy) = (x as f32 / 4.0 - 2.5, y as f32 / 4.0 - 2.5);
+                } else if (x / z).abs_diff(2) <= 1 && (y / z).abs_diff(1) <= 1 {
+                    let (dx, dy) = (x as f32 / 4.0 - 2.5, y as f32 / 4.0 - 1.5);
                     Vec3::splat(tent.weight(dx, dy))
                 } else {
                     Vec3::new(0.0, 0.0, 0.5)
                 };
-                let got = img.pixels[((20 - y) * 21 + x) as usize];
+                let got = img.pixels[((ih - 1 - y) * iw + x) as usize];
                 assert_eq!(got, want, "({x}, {y}) from the bottom left");
             }
         }
