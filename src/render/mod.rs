@@ -520,6 +520,91 @@ pub fn normal_rgb(n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampler::{Sampler, SamplerKind};
+    use std::sync::atomic::AtomicU64;
+
+    /// A lit triangle in front of an orthographic camera.
+    fn small_world() -> (World, CameraModel) {
+        let src = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
+             Lights { numLights 0 }
+             Background { color 0 0 0 ambientLight 1 1 1 }
+             Materials { numMaterials 1 PhongMaterial { diffuseColor 1 0.5 0.25 } }
+             Group { numObjects 1 MaterialIndex 0
+               Triangle { vertex0 -1 -1 0 vertex1 1 -1 0 vertex2 0 1 0 } }";
+        let scene = crate::format::parse_scene(src, std::path::Path::new("t.txt")).unwrap();
+        let world = World::build(&scene, crate::world::BuildOptions::default());
+        let camera = CameraModel::new(&world.camera);
+        (world, camera)
+    }
+
+    /// The band loop (one ray a pixel), the tile loop (4 jittered samples,
+    /// a tent filter reaching across tiles) and adaptive subdivision, on a
+    /// 37x21 image (partial tiles and bands).
+    fn every_path(size: (u32, u32)) -> [Settings; 3] {
+        let one = Settings::one_ray(size, PixelOffset::CENTER);
+        let tiles = Settings {
+            sampler: Sampler::new(SamplerKind::Jittered, 4, 0),
+            filter: Filter::Tent(1.5),
+            tile_size: 8,
+            ..one
+        };
+        let adaptive = Settings {
+            adaptive: Some(Adaptive {
+                threshold: 0.1,
+                max_depth: 2,
+            }),
+            tile_size: 8,
+            ..one
+        };
+        [one, tiles, adaptive]
+    }
+
+    /// Progress reports add up to the number of pixels, on every path.
+    #[test]
+    fn progress_adds_up_to_every_pixel() {
+        let (world, camera) = small_world();
+        let size = (37, 21);
+        for s in every_path(size) {
+            let done = AtomicU64::new(0);
+            let tick = |n: u64| {
+                done.fetch_add(n, Ordering::Relaxed);
+            };
+            let control = Control {
+                cancel: None,
+                on_progress: Some(&tick),
+            };
+            let r = render_image(&world, &camera, &Whitted::default(), &s, control);
+            assert!(r.frame.is_complete());
+            assert_eq!(done.load(Ordering::Relaxed), 37 * 21, "{s:?}");
+        }
+    }
+
+    /// A render cancelled before it starts traces no ray, leaves every row
+    /// incomplete and reports no progress; the same render not cancelled
+    /// is complete and not black.
+    #[test]
+    fn a_cancelled_render_traces_nothing() {
+        let (world, camera) = small_world();
+        for s in every_path((37, 21)) {
+            let stop = AtomicBool::new(true);
+            let done = AtomicU64::new(0);
+            let tick = |n: u64| {
+                done.fetch_add(n, Ordering::Relaxed);
+            };
+            let control = Control {
+                cancel: Some(&stop),
+                on_progress: Some(&tick),
+            };
+            let r = render_image(&world, &camera, &Whitted::default(), &s, control);
+            assert_eq!(r.counters.primary, 0, "{s:?}");
+            assert!(r.frame.complete.iter().all(|&c| !c), "{s:?}");
+            assert_eq!(done.load(Ordering::Relaxed), 0);
+            stop.store(false, Ordering::Relaxed);
+            let r = render_image(&world, &camera, &Whitted::default(), &s, control);
+            assert!(r.frame.is_complete() && r.counters.primary > 0);
+            assert!(r.frame.color.iter().any(|&c| c.x > 0.5));
+        }
+    }
 
     #[test]
     fn depth_maps_near_to_white() {
