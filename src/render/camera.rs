@@ -312,6 +312,75 @@ mod tests {
 
     use super::*;
 
+    /// Thin lens, closed form: every lens ray through a screen point starts
+    /// on the lens (the disk of radius `aperture` around the centre, in the
+    /// plane of `horizontal` and `up`) and passes through the pinhole ray's
+    /// point on the focus plane, `focus_distance` along the viewing
+    /// direction (orthographic: `focus_distance` along the parallel ray);
+    /// the lens points spread over the disk, and a pinhole's rays are the
+    /// plain rays.
+    #[test]
+    fn lens_rays_start_on_the_lens_and_meet_at_the_focus_point() {
+        let (center, direction) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, -0.5, -1.0));
+        let lens = Lens {
+            aperture: 0.3,
+            focus_distance: 6.0,
+            shutter: [0.0, 0.0],
+        };
+        for cam in [
+            Camera::Perspective {
+                center,
+                direction,
+                up: Vec3::Y,
+                angle_deg: 40.0,
+            },
+            Camera::Orthographic {
+                center,
+                direction,
+                up: Vec3::Y,
+                size: 5.0,
+            },
+        ] {
+            let pinhole = CameraModel::new(&cam);
+            let c = pinhole.clone().with_lens(lens);
+            let sampler = crate::sampler::Sampler::new(crate::sampler::SamplerKind::Random, 64, 7);
+            for s in [
+                Vec2::new(0.1, 0.7),
+                Vec2::new(0.5, 0.5),
+                Vec2::new(0.9, 0.2),
+            ] {
+                let plain = pinhole.ray(s);
+                let d = c.direction;
+                // The pinhole ray's point on the focus plane (or at the focus
+                // distance along a parallel ray), computed here from the frame.
+                let focus = if c.is_perspective() {
+                    let p = plain.at(6.0 / plain.dir.dot(d));
+                    assert!(((p - c.center).dot(d) - 6.0).abs() < 1e-4);
+                    p
+                } else {
+                    plain.origin + 6.0 * d
+                };
+                let mut widest: f32 = 0.0;
+                for index in 0..64 {
+                    let r = c.sample_ray(s, &mut sampler.stream((3, 4), index));
+                    let off = r.origin - plain.origin;
+                    assert!(off.dot(d).abs() < 1e-5, "{off} leaves the lens plane");
+                    assert!(off.length() <= 0.3 + 1e-5, "{off} outside the lens");
+                    widest = widest.max(off.length());
+                    assert!((r.dir.length() - 1.0).abs() < 1e-5);
+                    // Distance from the focus point to the ray's line.
+                    let v = focus - r.origin;
+                    let miss = (v - v.dot(r.dir) * r.dir).length();
+                    assert!(miss < 1e-4, "{cam:?} {s}: {miss}");
+                    assert!(v.dot(r.dir) > 0.0);
+                }
+                assert!(widest > 0.2, "lens points spread over the disk: {widest}");
+                let r = pinhole.sample_ray(s, &mut sampler.stream((3, 4), 0));
+                assert_eq!((r.origin, r.dir), (plain.origin, plain.dir));
+            }
+        }
+    }
+
     #[test]
     fn frame_is_orthonormal_for_skewed_up() {
         let c = CameraModel::new(&Camera::Perspective {
