@@ -381,6 +381,33 @@ mod tests {
         }
     }
 
+    /// With the shutter open over `[0.25, 0.75]`, camera rays carry times
+    /// spread over that interval and are otherwise the pinhole's rays.
+    #[test]
+    fn shutter_times_spread_over_the_open_interval() {
+        let pinhole = CameraModel::new(&Camera::Perspective {
+            center: Vec3::ZERO,
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            angle_deg: 30.0,
+        });
+        let c = pinhole.clone().with_lens(Lens {
+            shutter: [0.25, 0.75],
+            ..Lens::default()
+        });
+        let sampler = crate::sampler::Sampler::new(crate::sampler::SamplerKind::Random, 64, 1);
+        let s = Vec2::new(0.3, 0.6);
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for index in 0..64 {
+            let r = c.sample_ray(s, &mut sampler.stream((0, 0), index));
+            assert!((0.25..0.75).contains(&r.time), "{}", r.time);
+            (lo, hi) = (lo.min(r.time), hi.max(r.time));
+            let plain = pinhole.ray(s);
+            assert_eq!((r.origin, r.dir), (plain.origin, plain.dir));
+        }
+        assert!(lo < 0.3 && hi > 0.7, "times {lo}..{hi}");
+    }
+
     #[test]
     fn frame_is_orthonormal_for_skewed_up() {
         let c = CameraModel::new(&Camera::Perspective {
