@@ -352,6 +352,80 @@ mod tests {
         assert!(c.x > 2.0 && c.x < 4.0, "{c}");
     }
 
+    /// Closed form of the splat's direction conventions: every pixel holds
+    /// one sample at offset `o = (0.3, 0.6)` (y up) coloured by its column
+    /// and its row. An interior pixel `(x, row)` receives the sample of the
+    /// pixel `a` columns left and `b` rows *below* it (frame row `row + b`)
+    /// with weight `W(o.x − 0.5 − a, o.y − 0.5 − b)` (the sample's offset
+    /// from this pixel's centre, y up), so its colour is the
+    /// weighted mean of `x − a` and `row + b`, computed here without films.
+    #[test]
+    fn splatted_pixels_are_the_closed_form_weighted_means() {
+        let (w, h) = (9u32, 8u32);
+        let filter = Filter::Tent(1.5);
+        let o = Vec2::new(0.3, 0.6);
+        let rects = tiles(w, h, 4);
+        let films: Vec<Option<TileFilm>> = rects
+            .iter()
+            .map(|&t| {
+                let mut f = TileFilm::new(t, filter, (w, h));
+                for row in t.row0..t.row1 {
+                    for x in t.x0..t.x1 {
+                        f.splat(x, row, o, Vec3::new(x as f32, row as f32, 1.0));
+                    }
+                }
+                Some(f)
+            })
+            .collect();
+        let mut frame = Frame::new(w, h);
+        merge(&films, 4, filter.support(), &mut frame);
+        for row in 2..h - 2 {
+            for x in 2..w - 2 {
+                let (mut sum, mut total) = (Vec3::ZERO, 0.0);
+                for a in -2i32..=2 {
+                    for b in -2i32..=2 {
+                        let wt = filter.weight(o.x - 0.5 - a as f32, o.y - 0.5 - b as f32);
+                        let c = Vec3::new((x as i32 - a) as f32, (row as i32 + b) as f32, 1.0);
+                        sum += wt * c;
+                        total += wt;
+                    }
+                }
+                let want = sum / total;
+                let got = frame.color[(row * w + x) as usize];
+                assert!(
+                    (got - want).abs().max_element() < 1e-5,
+                    "({x}, {row}): {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    /// A pixel keeps the hit of its sample nearest the reference point, and
+    /// counts every camera ray.
+    #[test]
+    fn the_nearest_sample_s_hit_is_kept() {
+        let t = Rect {
+            x0: 0,
+            row0: 0,
+            x1: 2,
+            row1: 2,
+        };
+        let mut f = TileFilm::new(t, Filter::Box(0.5), (2, 2));
+        f.record_hit(1, 0, 0.5, Some((3.0, Vec3::X)));
+        f.record_hit(1, 0, 0.2, Some((4.0, Vec3::Y)));
+        f.record_hit(1, 0, 0.3, Some((5.0, Vec3::Z)));
+        f.record_hit(1, 0, 0.25, None);
+        let k = f.tile_index(1, 0);
+        assert_eq!((f.depth[k], f.normal[k], f.samples[k]), (4.0, Vec3::Y, 4));
+        f.record_hit(1, 0, 0.1, None);
+        assert_eq!(
+            (f.depth[k], f.normal[k], f.samples[k]),
+            (f32::INFINITY, Vec3::ZERO, 5)
+        );
+        let other = f.tile_index(0, 1);
+        assert_eq!((f.depth[other], f.samples[other]), (f32::INFINITY, 0));
+    }
+
     #[test]
     fn missing_tiles_leave_rows_incomplete() {
         let (w, h) = (8, 8);
