@@ -40,6 +40,8 @@ pub mod octree;
 mod overlap;
 #[cfg(test)]
 pub(crate) mod testutil;
+#[cfg(test)]
+mod work_tests;
 
 pub use brute::Brute;
 pub use bvh::Bvh;

@@ -68,6 +68,28 @@ pub(crate) fn soup(seed: u64, n: usize) -> Vec<Primitive> {
     p
 }
 
+/// A 64x64 height field of 8,192 triangles (x and z from 0 to 64).
+pub(crate) fn terrain() -> Vec<Primitive> {
+    let z = |i: usize, j: usize| ((i as f32 * 0.3).sin() + (j as f32 * 0.2).cos()) * 2.0;
+    let v = |i: usize, j: usize| Vec3::new(i as f32, z(i, j), j as f32);
+    let mut p = Vec::new();
+    for i in 0..64 {
+        for j in 0..64 {
+            let (a, b, c, d) = (v(i, j), v(i + 1, j), v(i, j + 1), v(i + 1, j + 1));
+            p.push(prim(Shape::Triangle(Triangle::new(a, b, d))));
+            p.push(prim(Shape::Triangle(Triangle::new(a, d, c))));
+        }
+    }
+    p
+}
+
+/// A random ray from above the [`terrain`] down to a point of it.
+pub(crate) fn terrain_ray(r: &mut Rng) -> Ray {
+    let o = Vec3::new(64.0 * r.f(), 30.0, 64.0 * r.f());
+    let to = Vec3::new(64.0 * r.f(), 0.0, 64.0 * r.f());
+    Ray::new(o, to - o)
+}
+
 /// A random ray from around the soup, aimed through it.
 pub(crate) fn ray(r: &mut Rng) -> Ray {
     let o = r.v(-8.0, 8.0);

@@ -274,7 +274,7 @@ impl Aggregate for Bvh4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::testutil::{assert_agrees, prim, soup, sphere};
+    use crate::accel::testutil::{assert_agrees, soup, sphere, terrain};
 
     fn all(prims: &[Primitive]) -> Vec<u32> {
         (0..prims.len() as u32).collect()
@@ -326,21 +326,6 @@ mod tests {
         1.0 + sum / root_box.surface_area() as f64
     }
 
-    /// A 64x64 height field of 8,192 triangles.
-    fn terrain() -> Vec<Primitive> {
-        let z = |i: usize, j: usize| ((i as f32 * 0.3).sin() + (j as f32 * 0.2).cos()) * 2.0;
-        let v = |i: usize, j: usize| Vec3::new(i as f32, z(i, j), j as f32);
-        let mut p = Vec::new();
-        for i in 0..64 {
-            for j in 0..64 {
-                let (a, b, c, d) = (v(i, j), v(i + 1, j), v(i, j + 1), v(i + 1, j + 1));
-                p.push(prim(Shape::Triangle(crate::shape::Triangle::new(a, b, d))));
-                p.push(prim(Shape::Triangle(crate::shape::Triangle::new(a, d, c))));
-            }
-        }
-        p
-    }
-
     /// Build quality, which no agreement test can see (any tree gives
     /// the right hits): the SAH cost of the tree and the nodes and
     /// triangles a fixed set of rays visits stay within 3% of the values
@@ -363,10 +348,7 @@ mod tests {
                 let ray = if name == "soup" {
                     crate::accel::testutil::ray(&mut r)
                 } else {
-                    // From above the height field down to a point of it.
-                    let o = Vec3::new(64.0 * r.f(), 30.0, 64.0 * r.f());
-                    let to = Vec3::new(64.0 * r.f(), 0.0, 64.0 * r.f());
-                    Ray::new(o, to - o)
+                    crate::accel::testutil::terrain_ray(&mut r)
                 };
                 b.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
                 b.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c);

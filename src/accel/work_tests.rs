@@ -1,0 +1,82 @@
+//! The work each textbook accelerator does per ray, held where it was
+//! measured. Every accelerator returns brute force's hits whatever its
+//! structure (the agreement tests), so a build that subdivides worse (a
+//! wrong split position, resolution, depth or leaf size) is invisible to
+//! them; the nodes (or cells) visited and the primitives tested per ray are
+//! not.
+
+use super::testutil::{ray, soup, terrain, terrain_ray, Rng};
+use super::{Aggregate, Bvh, Grid, NestedGrid, Octree, Split, Storage};
+use crate::stats::Counters;
+
+/// Nodes (or cells) visited and primitive tests per ray pair (closest and
+/// any hit), measured in session 8: `(scene, accelerator, nodes, tests)`.
+const MEASURED: [(&str, &str, f64, f64); 14] = [
+    ("soup", "grid", 22.94, 8.37),
+    ("soup", "octree", 21.69, 23.45),
+    ("soup", "octree-inner", 7.46, 1417.83),
+    ("soup", "bvh-midpoint", 97.14, 31.61),
+    ("soup", "bvh-median", 91.41, 39.78),
+    ("soup", "bvh-sah", 124.93, 10.28),
+    ("soup", "nested-grid", 8.15, 28.90),
+    ("terrain", "grid", 19.12, 19.48),
+    ("terrain", "octree", 34.94, 20.35),
+    ("terrain", "octree-inner", 12.99, 1831.03),
+    ("terrain", "bvh-midpoint", 53.49, 9.98),
+    ("terrain", "bvh-median", 53.39, 10.39),
+    ("terrain", "bvh-sah", 61.26, 4.52),
+    ("terrain", "nested-grid", 20.92, 16.66),
+];
+
+/// Within 3% of the measured work.
+#[test]
+fn every_accelerator_s_work_per_ray_stays_where_it_was_measured() {
+    for (scene, prims) in [("soup", soup(5, 3000)), ("terrain", terrain())] {
+        let ids = || (0..prims.len() as u32).collect::<Vec<_>>();
+        let p = &prims[..];
+        let accels: [(&str, Box<dyn Aggregate>); 7] = [
+            ("grid", Box::new(Grid::new(p, ids(), None))),
+            ("octree", Box::new(Octree::new(p, ids()))),
+            (
+                "octree-inner",
+                Box::new(Octree::with_storage(p, ids(), Storage::Inner)),
+            ),
+            (
+                "bvh-midpoint",
+                Box::new(Bvh::new(p, ids(), Split::Midpoint)),
+            ),
+            ("bvh-median", Box::new(Bvh::new(p, ids(), Split::Median))),
+            ("bvh-sah", Box::new(Bvh::new(p, ids(), Split::Sah))),
+            ("nested-grid", Box::new(NestedGrid::new(p, ids(), 16, 2))),
+        ];
+        for (name, acc) in accels {
+            let mut c = Counters::default();
+            let mut r = Rng::new(11);
+            let rays = 2000;
+            for _ in 0..rays {
+                let ray = if scene == "soup" {
+                    ray(&mut r)
+                } else {
+                    terrain_ray(&mut r)
+                };
+                acc.intersect(p, &ray, 0.0, f32::INFINITY, &mut c);
+                acc.occluded(p, &ray, 0.0, f32::INFINITY, &mut c);
+            }
+            let nodes = c.nodes_visited as f64 / rays as f64;
+            let tests = c.intersection_tests as f64 / rays as f64;
+            eprintln!("    (\"{scene}\", \"{name}\", {nodes:.2}, {tests:.2}),");
+            let &(_, _, n_max, t_max) = MEASURED
+                .iter()
+                .find(|m| m.0 == scene && m.1 == name)
+                .unwrap();
+            assert!(
+                nodes <= n_max * 1.03,
+                "{scene} {name}: {nodes} nodes a ray pair"
+            );
+            assert!(
+                tests <= t_max * 1.03,
+                "{scene} {name}: {tests} tests a ray pair"
+            );
+        }
+    }
+}
