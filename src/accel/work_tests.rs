@@ -28,7 +28,7 @@ const MEASURED: [(&str, &str, f64, f64); 14] = [
     ("terrain", "nested-grid", 20.92, 16.66),
 ];
 
-/// Within 3% of the measured work.
+/// Within 3% of the measured work, either way.
 #[test]
 fn every_accelerator_s_work_per_ray_stays_where_it_was_measured() {
     for (scene, prims) in [("soup", soup(5, 3000)), ("terrain", terrain())] {
@@ -69,12 +69,16 @@ fn every_accelerator_s_work_per_ray_stays_where_it_was_measured() {
                 .iter()
                 .find(|m| m.0 == scene && m.1 == name)
                 .unwrap();
+            // Both ways: more work is a worse build, less (or none) a
+            // counter that stopped counting; a real improvement updates
+            // the table.
+            let near = |v: f64, m: f64| (v - m).abs() <= 0.03 * m;
             assert!(
-                nodes <= n_max * 1.03,
+                near(nodes, n_max),
                 "{scene} {name}: {nodes} nodes a ray pair"
             );
             assert!(
-                tests <= t_max * 1.03,
+                near(tests, t_max),
                 "{scene} {name}: {tests} tests a ray pair"
             );
         }

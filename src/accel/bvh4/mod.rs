@@ -329,9 +329,10 @@ mod tests {
     /// Build quality, which no agreement test can see (any tree gives
     /// the right hits): the SAH cost of the tree and the nodes and
     /// triangles a fixed set of rays visits stay within 3% of the values
-    /// measured when this test was written (session 8). A build that
-    /// splits worse (a wrong bin, a wrong cost, a wrong axis) exceeds
-    /// them; a better one should lower the numbers here.
+    /// measured when this test was written (session 8), either way. A
+    /// build that splits worse (a wrong bin, a wrong cost, a wrong axis)
+    /// exceeds them; a counter that stops counting falls below; a better
+    /// build should lower the numbers here.
     #[test]
     fn build_quality_stays_where_it_was_measured() {
         // (mesh, and its measured SAH cost, nodes and tests a ray pair)
@@ -358,13 +359,13 @@ mod tests {
             eprintln!(
                 "{name}: SAH cost {cost:.3}, {nodes:.2} nodes and {tests:.2} tests a ray pair"
             );
-            assert!(cost <= cost_max * 1.03, "{name}: SAH cost {cost}");
+            // Both ways: more is a worse build, less (or none) a counter
+            // that stopped counting; a real improvement updates the table.
+            let near = |v: f64, m: f64| (v - m).abs() <= 0.03 * m;
+            assert!(near(cost, cost_max), "{name}: SAH cost {cost}");
+            assert!(near(nodes, nodes_max), "{name}: {nodes} nodes a ray pair");
             assert!(
-                nodes <= nodes_max * 1.03,
-                "{name}: {nodes} nodes a ray pair"
-            );
-            assert!(
-                tests <= tests_max * 1.03,
+                near(tests, tests_max),
                 "{name}: {tests} triangle tests a ray pair"
             );
         }
