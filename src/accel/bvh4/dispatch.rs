@@ -11,7 +11,7 @@
 //! (`traverse::RayData::boxes_avx`, given an `Avx` token made only here).
 
 use super::node::{Node, Tri4};
-use super::traverse::{self, Closest, Fallback, Portable, RayData, DEEP, SHALLOW};
+use super::traverse::{self, BoxTest, Closest, Fallback, Portable, RayData, DEEP, SHALLOW};
 use crate::math::Ray;
 use crate::stats::TraversalStats;
 
@@ -60,6 +60,52 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     portable::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep)
 }
 
+/// The closest-hit walk with box test `bt`: the ray's constants, then the
+/// stack the tree's depth needs. Always inlined, so that each copy below
+/// compiles it with its own target features.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn closest_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+    stats: &mut S,
+    deep: bool,
+) -> Option<Closest> {
+    let rd = &RayData::new(ray);
+    if deep {
+        traverse::closest::<S, F, _, DEEP>(bt, nodes, tris, fallback, rd, tmin, tmax, stats)
+    } else {
+        traverse::closest::<S, F, _, SHALLOW>(bt, nodes, tris, fallback, rd, tmin, tmax, stats)
+    }
+}
+
+/// The any-hit walk with box test `bt` (see [`closest_with`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn any_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    ray: &Ray,
+    (tmin, tmax): (f32, f32),
+    skip: u32,
+    stats: &mut S,
+    deep: bool,
+) -> bool {
+    let rd = &RayData::new(ray);
+    if deep {
+        traverse::any::<S, F, _, DEEP>(bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats)
+    } else {
+        traverse::any::<S, F, _, SHALLOW>(bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats)
+    }
+}
+
 /// The portable copies, out of line: inlined into the dispatchers above,
 /// their stack frame and saved registers were set up on every query even
 /// when the AVX2 copy ran (callgrind, scene6_07: 40 instructions a shadow
@@ -79,16 +125,9 @@ mod portable {
         stats: &mut S,
         deep: bool,
     ) -> Option<Closest> {
-        let rd = &RayData::new(ray);
-        if deep {
-            traverse::closest::<S, F, _, DEEP>(
-                Portable, nodes, tris, fallback, rd, tmin, tmax, stats,
-            )
-        } else {
-            traverse::closest::<S, F, _, SHALLOW>(
-                Portable, nodes, tris, fallback, rd, tmin, tmax, stats,
-            )
-        }
+        closest_with(
+            Portable, nodes, tris, fallback, ray, tmin, tmax, stats, deep,
+        )
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -103,16 +142,17 @@ mod portable {
         stats: &mut S,
         deep: bool,
     ) -> bool {
-        let rd = &RayData::new(ray);
-        if deep {
-            traverse::any::<S, F, _, DEEP>(
-                Portable, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
-            )
-        } else {
-            traverse::any::<S, F, _, SHALLOW>(
-                Portable, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
-            )
-        }
+        any_with(
+            Portable,
+            nodes,
+            tris,
+            fallback,
+            ray,
+            (tmin, tmax),
+            skip,
+            stats,
+            deep,
+        )
     }
 }
 
@@ -138,12 +178,7 @@ mod avx2 {
         // SAFETY: these functions are called only after
         // `is_x86_feature_detected!("avx2")` (`Avx::new`'s contract).
         let avx = unsafe { Avx::new() };
-        let rd = &RayData::new(ray);
-        if deep {
-            traverse::closest::<S, F, _, DEEP>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
-        } else {
-            traverse::closest::<S, F, _, SHALLOW>(avx, nodes, tris, fallback, rd, tmin, tmax, stats)
-        }
+        closest_with(avx, nodes, tris, fallback, ray, tmin, tmax, stats, deep)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -161,13 +196,16 @@ mod avx2 {
         // SAFETY: these functions are called only after
         // `is_x86_feature_detected!("avx2")` (`Avx::new`'s contract).
         let avx = unsafe { Avx::new() };
-        let rd = &RayData::new(ray);
-        if deep {
-            traverse::any::<S, F, _, DEEP>(avx, nodes, tris, fallback, rd, tmin, tmax, skip, stats)
-        } else {
-            traverse::any::<S, F, _, SHALLOW>(
-                avx, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
-            )
-        }
+        any_with(
+            avx,
+            nodes,
+            tris,
+            fallback,
+            ray,
+            (tmin, tmax),
+            skip,
+            stats,
+            deep,
+        )
     }
 }
