@@ -312,6 +312,32 @@ mod tests {
         }
     }
 
+    /// A frame of one sample a pixel at offset `o`, coloured by `colour`,
+    /// splatted tile by tile (tiles of `ts`) and merged.
+    fn splat_every_pixel(
+        (w, h): (u32, u32),
+        ts: u32,
+        filter: Filter,
+        o: Vec2,
+        colour: impl Fn(u32, u32) -> Vec3,
+    ) -> Frame {
+        let films: Vec<Option<TileFilm>> = tiles(w, h, ts)
+            .iter()
+            .map(|&t| {
+                let mut f = TileFilm::new(t, filter, (w, h));
+                for row in t.row0..t.row1 {
+                    for x in t.x0..t.x1 {
+                        f.splat(x, row, o, colour(x, row));
+                    }
+                }
+                Some(f)
+            })
+            .collect();
+        let mut frame = Frame::new(w, h);
+        merge(&films, ts, filter.support(), &mut frame);
+        frame
+    }
+
     /// The same samples splatted through different tilings give the same
     /// pixels up to rounding (the order of the sums differs), and a pixel is
     /// the weighted mean of the samples around it.
@@ -320,24 +346,7 @@ mod tests {
         let (w, h) = (7u32, 5u32);
         let filter = Filter::Tent(1.5);
         let colour = |x: u32, row: u32| Vec3::new(x as f32, row as f32, 1.0);
-        let render = |ts: u32| {
-            let rects = tiles(w, h, ts);
-            let films: Vec<Option<TileFilm>> = rects
-                .iter()
-                .map(|&t| {
-                    let mut f = TileFilm::new(t, filter, (w, h));
-                    for row in t.row0..t.row1 {
-                        for x in t.x0..t.x1 {
-                            f.splat(x, row, Vec2::new(0.3, 0.6), colour(x, row));
-                        }
-                    }
-                    Some(f)
-                })
-                .collect();
-            let mut frame = Frame::new(w, h);
-            merge(&films, ts, filter.support(), &mut frame);
-            frame
-        };
+        let render = |ts: u32| splat_every_pixel((w, h), ts, filter, Vec2::new(0.3, 0.6), colour);
         let a = render(2);
         let b = render(16);
         for (p, q) in a.color.iter().zip(&b.color) {
@@ -364,21 +373,9 @@ mod tests {
         let (w, h) = (9u32, 8u32);
         let filter = Filter::Tent(1.5);
         let o = Vec2::new(0.3, 0.6);
-        let rects = tiles(w, h, 4);
-        let films: Vec<Option<TileFilm>> = rects
-            .iter()
-            .map(|&t| {
-                let mut f = TileFilm::new(t, filter, (w, h));
-                for row in t.row0..t.row1 {
-                    for x in t.x0..t.x1 {
-                        f.splat(x, row, o, Vec3::new(x as f32, row as f32, 1.0));
-                    }
-                }
-                Some(f)
-            })
-            .collect();
-        let mut frame = Frame::new(w, h);
-        merge(&films, 4, filter.support(), &mut frame);
+        let frame = splat_every_pixel((w, h), 4, filter, o, |x, row| {
+            Vec3::new(x as f32, row as f32, 1.0)
+        });
         for row in 2..h - 2 {
             for x in 2..w - 2 {
                 let (mut sum, mut total) = (Vec3::ZERO, 0.0);
