@@ -602,7 +602,7 @@ mod tests {
                 assert!(bits(&bands) == bits(&tiles), "{s:?}");
                 // Not trivially equal: lit and background pixels, hits and misses.
                 assert!(bands.color.iter().any(|c| c.x > 0.5));
-                assert!(bands.color.iter().any(|c| *c == Vec3::ZERO));
+                assert!(bands.color.contains(&Vec3::ZERO));
                 assert!(bands.depth.iter().any(|d| d.is_finite()));
             }
         }
