@@ -260,6 +260,7 @@ fn spread(c: &[Vec3; 4]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
     #[test]
     fn spread_is_the_largest_channel_range() {
@@ -276,7 +277,7 @@ mod tests {
     /// An 8x8 orthographic view, one world unit per pixel, of a lit
     /// half-plane: a triangle whose edge `axis = 0.3` runs straight through
     /// one column (`x`) or one row (`y`) of pixels, 0.3 of the way across.
-    fn edge_frame(axis: char, max_depth: u32, threshold: f32) -> (Frame, Counters) {
+    fn edge_scene(axis: char) -> (World, CameraModel) {
         let (far, e) = (100.0, 0.3);
         let v = |along: f32, across: f32| match axis {
             'x' => format!("{across} {along} 0"),
@@ -296,25 +297,111 @@ mod tests {
         let scene = crate::format::parse_scene(&src, std::path::Path::new("edge.txt")).unwrap();
         let world = World::build(&scene, crate::world::BuildOptions::default());
         let camera = CameraModel::new(&world.camera);
-        let settings = Settings {
+        (world, camera)
+    }
+
+    /// Adaptive settings for the 8x8 edge view.
+    fn edge_settings(max_depth: u32, threshold: f32) -> Settings {
+        Settings {
             adaptive: Some(Adaptive {
                 threshold,
                 max_depth,
             }),
             ..Settings::one_ray((8, 8), super::super::PixelOffset::CENTER)
-        };
+        }
+    }
+
+    /// Both sides lit: the two edges' triangles face opposite ways.
+    fn lit_both_sides() -> crate::integrator::Whitted {
+        crate::integrator::Whitted {
+            shade_back: true,
+            ..Default::default()
+        }
+    }
+
+    fn edge_frame(axis: char, max_depth: u32, threshold: f32) -> (Frame, Counters) {
+        let (world, camera) = edge_scene(axis);
+        let settings = edge_settings(max_depth, threshold);
         let r = super::super::render_image(
             &world,
             &camera,
-            // Both sides lit: the two edges' triangles face opposite ways.
-            &crate::integrator::Whitted {
-                shade_back: true,
-                ..Default::default()
-            },
+            &lit_both_sides(),
             &settings,
             Control::default(),
         );
         (r.frame, r.counters)
+    }
+
+    /// An integrator whose colour is the point's first stream value: points
+    /// that share a stream get the same colour.
+    struct StreamValue;
+
+    impl Integrator for StreamValue {
+        fn li(
+            &self,
+            _: &World,
+            _: &crate::math::Ray,
+            _: f32,
+            stream: &mut crate::sampler::SampleStream,
+            _: &mut Counters,
+            _: &mut impl crate::integrator::RayObserver,
+        ) -> (Vec3, Option<crate::world::Hit>) {
+            (Vec3::splat(stream.next_1d()), None)
+        }
+    }
+
+    /// Every lattice point has a stream of its own, so the noise of two
+    /// points is independent. Unsplit, a pixel is the mean of its four
+    /// corners' values: with a stream per point all 64 pixels differ; with
+    /// a stream shared by all the points (a key of 0) they would be equal,
+    /// and with one per lattice column (a key of `x` alone) every column of
+    /// pixels would be one value.
+    #[test]
+    fn every_lattice_point_has_its_own_stream() {
+        let (world, camera) = edge_scene('x');
+        for depth in [0, 2] {
+            let s = edge_settings(depth, 2.0);
+            let f =
+                super::super::render_image(&world, &camera, &StreamValue, &s, Control::default())
+                    .frame;
+            let mut bits: Vec<u32> = f.color.iter().map(|c| c.x.to_bits()).collect();
+            bits.sort_unstable();
+            bits.dedup();
+            assert_eq!(bits.len(), 64, "depth {depth}");
+        }
+    }
+
+    /// A cancel that arrives between the passes (here from the first
+    /// tile's progress report, on one thread, so in pass 2) stops the tiles
+    /// not yet started: one 2x2 tile is done, the frame is incomplete.
+    #[test]
+    fn a_cancel_in_the_second_pass_stops_it() {
+        let (world, camera) = edge_scene('x');
+        let settings = Settings {
+            tile_size: 2,
+            ..edge_settings(2, 0.01)
+        };
+        let stop = AtomicBool::new(false);
+        let done = AtomicU64::new(0);
+        let tick = |n: u64| {
+            done.fetch_add(n, Ordering::Relaxed);
+            stop.store(true, Ordering::Relaxed);
+        };
+        let control = Control {
+            cancel: Some(&stop),
+            on_progress: Some(&tick),
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let r = pool.install(|| {
+            super::super::render_image(&world, &camera, &lit_both_sides(), &settings, control)
+        });
+        assert_eq!(done.load(Ordering::Relaxed), 4);
+        // Rows are complete only when all their tiles are.
+        assert!(r.frame.complete.iter().all(|&c| !c));
+        assert!(!r.frame.is_complete());
     }
 
     /// Closed form: the lattice has `s = 2^depth` columns per pixel; the
