@@ -585,7 +585,18 @@ mod tests {
                 sampler: Sampler::new(SamplerKind::Jittered, 4, 3),
                 ..one
             };
-            for s in [one, kept, four] {
+            // A tent of radius 1/2 reaches no neighbour either (the band
+            // loop), but its weights are not 1: the weighted mean's branch.
+            let tent = Settings {
+                filter: Filter::Tent(0.5),
+                ..four
+            };
+            // And every one of them with the per-pixel cost plane filled.
+            let costed = [one, kept, four, tent].map(|s| Settings {
+                pixel_cost: true,
+                ..s
+            });
+            for s in [one, kept, four, tent].into_iter().chain(costed) {
                 let it = &Whitted::default();
                 let bands = render_image(&world, &camera, it, &s, Control::default()).frame;
                 let tiles = render_region(&world, &camera, it, &s, Control::default(), whole).frame;
@@ -597,9 +608,21 @@ mod tests {
                         f.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>(),
                         f.normal.iter().map(v).collect::<Vec<_>>(),
                         f.samples.clone(),
+                        f.cost
+                            .iter()
+                            .map(|c| (c.tests, c.nodes))
+                            .collect::<Vec<_>>(),
                     )
                 };
                 assert!(bits(&bands) == bits(&tiles), "{s:?}");
+                if s.pixel_cost {
+                    // The pixels' costs add up to the render's counters.
+                    let r = render_image(&world, &camera, it, &s, Control::default());
+                    let sum = |f: fn(&PixelCost) -> u64| r.frame.cost.iter().map(f).sum::<u64>();
+                    assert_eq!(sum(|c| c.tests), r.counters.intersection_tests);
+                    assert_eq!(sum(|c| c.nodes), r.counters.nodes_visited);
+                    assert!(r.counters.intersection_tests > 0 && r.counters.nodes_visited > 0);
+                }
                 // Not trivially equal: lit and background pixels, hits and misses.
                 assert!(bands.color.iter().any(|c| c.x > 0.5));
                 assert!(bands.color.contains(&Vec3::ZERO));
