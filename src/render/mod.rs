@@ -520,17 +520,18 @@ pub fn normal_rgb(n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::{Sampler, SamplerKind};
+    use crate::sampler::{GridLayout, Sampler, SamplerKind};
     use std::sync::atomic::AtomicU64;
 
-    /// A lit triangle in front of an orthographic camera.
+    /// A lit triangle in front of an orthographic camera, tilted (its depth
+    /// varies across a pixel).
     fn small_world() -> (World, CameraModel) {
         let src = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
              Lights { numLights 0 }
              Background { color 0 0 0 ambientLight 1 1 1 }
              Materials { numMaterials 1 PhongMaterial { diffuseColor 1 0.5 0.25 } }
              Group { numObjects 1 MaterialIndex 0
-               Triangle { vertex0 -1 -1 0 vertex1 1 -1 0 vertex2 0 1 0 } }";
+               Triangle { vertex0 -1 -1 0 vertex1 1 -1 0.5 vertex2 0 1 -0.5 } }";
         let scene = crate::format::parse_scene(src, std::path::Path::new("t.txt")).unwrap();
         let world = World::build(&scene, crate::world::BuildOptions::default());
         let camera = CameraModel::new(&world.camera);
@@ -591,12 +592,19 @@ mod tests {
                 filter: Filter::Tent(0.5),
                 ..four
             };
+            // Four samples on a grid: all as near the pixel centre, so the
+            // depth and normal are the first sample's (the triangle is
+            // tilted: each sample has its own depth).
+            let grid = Settings {
+                sampler: Sampler::new(SamplerKind::Uniform(GridLayout::CENTERS), 4, 0),
+                ..one
+            };
             // And every one of them with the per-pixel cost plane filled.
-            let costed = [one, kept, four, tent].map(|s| Settings {
+            let costed = [one, kept, four, tent, grid].map(|s| Settings {
                 pixel_cost: true,
                 ..s
             });
-            for s in [one, kept, four, tent].into_iter().chain(costed) {
+            for s in [one, kept, four, tent, grid].into_iter().chain(costed) {
                 let it = &Whitted::default();
                 let bands = render_image(&world, &camera, it, &s, Control::default()).frame;
                 let tiles = render_region(&world, &camera, it, &s, Control::default(), whole).frame;
