@@ -693,5 +693,19 @@ mod tests {
         assert_eq!(depth_grey(9.5, 9.0, 10.0), 0.5);
         assert_eq!(depth_grey(5.0, 9.0, 10.0), 1.0);
         assert_eq!(depth_grey(f32::INFINITY, 9.0, 10.0), 0.0);
+        // A range longer than 1 (a quotient, not a product).
+        assert_eq!(depth_grey(9.5, 9.0, 11.0), 0.75);
+        // An empty range: black, not NaN.
+        assert_eq!(depth_grey(3.0, 5.0, 5.0), 0.0);
+        assert_eq!(depth_grey(5.0, 5.0, 5.0), 0.0);
+    }
+
+    #[test]
+    fn normals_show_as_their_absolute_values() {
+        assert_eq!(
+            normal_rgb(Vec3::new(-0.6, 0.8, -0.0)),
+            Vec3::new(0.6, 0.8, 0.0)
+        );
+        assert_eq!(normal_rgb(Vec3::new(0.0, -1.0, 0.0)), Vec3::Y);
     }
 }
