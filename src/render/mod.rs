@@ -574,8 +574,20 @@ mod tests {
             x1: w,
             row1: h,
         };
-        for offset in [PixelOffset::CENTER, PixelOffset(Vec2::new(0.25, 0.125))] {
+        // The lower-left corner is outside a tent of radius 1/2: weight 0.
+        let corner = PixelOffset(Vec2::ZERO);
+        for offset in [
+            PixelOffset::CENTER,
+            PixelOffset(Vec2::new(0.25, 0.125)),
+            corner,
+        ] {
             let one = Settings::one_ray((w, h), offset);
+            // One ray through a tent of radius 1/2: the one-ray shortcut
+            // only applies where the ray's weight is 1 (black where it is 0).
+            let one_tent = Settings {
+                filter: Filter::Tent(0.5),
+                ..one
+            };
             let kept = Settings {
                 keep_samples: true,
                 ..one
@@ -600,14 +612,25 @@ mod tests {
                 ..one
             };
             // And every one of them with the per-pixel cost plane filled.
-            let costed = [one, kept, four, tent, grid].map(|s| Settings {
+            let all = [one, one_tent, kept, four, tent, grid];
+            let costed = all.map(|s| Settings {
                 pixel_cost: true,
                 ..s
             });
-            for s in [one, kept, four, tent, grid].into_iter().chain(costed) {
+            for s in all.into_iter().chain(costed) {
                 let it = &Whitted::default();
-                let bands = render_image(&world, &camera, it, &s, Control::default()).frame;
-                let tiles = render_region(&world, &camera, it, &s, Control::default(), whole).frame;
+                let bands = render_image(&world, &camera, it, &s, Control::default());
+                let tiles = render_region(&world, &camera, it, &s, Control::default(), whole);
+                // The kept samples too (in pixel order: the loops differ).
+                let sorted = |r: &Rendered| {
+                    let mut v = r.samples.clone();
+                    v.sort_by_key(|k| (k.pixel, k.offset.x.to_bits(), k.offset.y.to_bits()));
+                    v
+                };
+                let n = if s.keep_samples { w * h } else { 0 };
+                assert_eq!(bands.samples.len(), n as usize, "{s:?}");
+                assert!(sorted(&bands) == sorted(&tiles), "{s:?}");
+                let (bands, tiles) = (bands.frame, tiles.frame);
                 assert!(bands.is_complete() && tiles.is_complete());
                 let bits = |f: &Frame| {
                     let v = |c: &Vec3| c.to_array().map(f32::to_bits);
@@ -631,8 +654,13 @@ mod tests {
                     assert_eq!(sum(|c| c.nodes), r.counters.nodes_visited);
                     assert!(r.counters.intersection_tests > 0 && r.counters.nodes_visited > 0);
                 }
-                // Not trivially equal: lit and background pixels, hits and misses.
-                assert!(bands.color.iter().any(|c| c.x > 0.5));
+                // Not trivially equal: lit and background pixels, hits and
+                // misses (all black where the one ray's weight is 0).
+                let black = s
+                    .sampler
+                    .fixed_offset()
+                    .is_some_and(|o| s.filter.weight(o.x - 0.5, o.y - 0.5) == 0.0);
+                assert_eq!(bands.color.iter().any(|c| c.x > 0.5), !black, "{s:?}");
                 assert!(bands.color.contains(&Vec3::ZERO));
                 assert!(bands.depth.iter().any(|d| d.is_finite()));
             }
