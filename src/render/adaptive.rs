@@ -274,11 +274,12 @@ mod tests {
         assert_eq!(spread(&[Vec3::ONE; 4]), 0.0);
     }
 
-    /// An 8x8 orthographic view, one world unit per pixel, of a lit
-    /// half-plane: a triangle whose edge `axis = 0.3` runs straight through
-    /// one column (`x`) or one row (`y`) of pixels, 0.3 of the way across.
-    fn edge_scene(axis: char) -> (World, CameraModel) {
-        let (far, e) = (100.0, 0.3);
+    /// An 8x8 orthographic view (x and y from -4 to 4), one world unit per
+    /// pixel, of a lit half-plane `axis < e`: a triangle whose edge
+    /// `axis = e` runs straight through one column (`x`) or one row (`y`)
+    /// of pixels.
+    fn edge_scene(axis: char, e: f32) -> (World, CameraModel) {
+        let far = 100.0;
         let v = |along: f32, across: f32| match axis {
             'x' => format!("{across} {along} 0"),
             _ => format!("{along} {across} 0"),
@@ -319,8 +320,8 @@ mod tests {
         }
     }
 
-    fn edge_frame(axis: char, max_depth: u32, threshold: f32) -> (Frame, Counters) {
-        let (world, camera) = edge_scene(axis);
+    fn edge_frame(axis: char, e: f32, max_depth: u32, threshold: f32) -> (Frame, Counters) {
+        let (world, camera) = edge_scene(axis, e);
         let settings = edge_settings(max_depth, threshold);
         let r = super::super::render_image(
             &world,
@@ -358,7 +359,7 @@ mod tests {
     /// pixels would be one value.
     #[test]
     fn every_lattice_point_has_its_own_stream() {
-        let (world, camera) = edge_scene('x');
+        let (world, camera) = edge_scene('x', 0.3);
         for depth in [0, 2] {
             let s = edge_settings(depth, 2.0);
             let f =
@@ -376,7 +377,7 @@ mod tests {
     /// not yet started: one 2x2 tile is done, the frame is incomplete.
     #[test]
     fn a_cancel_in_the_second_pass_stops_it() {
-        let (world, camera) = edge_scene('x');
+        let (world, camera) = edge_scene('x', 0.3);
         let settings = Settings {
             tile_size: 2,
             ..edge_settings(2, 0.01)
@@ -410,27 +411,30 @@ mod tests {
     /// edge pixel is `(⌊0.3·s⌋ + 1/2)/s` of the lit value (0.5, 0.25, 0.375,
     /// 0.3125, 0.28125 for depths 0 to 4: exact binary fractions), pixels
     /// before the edge are lit and pixels past it are background. The edge
-    /// in `x` is in column 4 (x from -4 to 4, left to right); the edge in
-    /// `y` is in row 3 from the top (y = 0.3 is 4.3 rows above the bottom,
-    /// and frame rows count from the top).
+    /// lies 0.3 of the way across a pixel: at 0.3, column 4 (x from -4 to
+    /// 4, left to right) or row 3 from the top (frame rows count from the
+    /// top); and at -3.7, the first column or the bottom row, where lattice
+    /// coordinates start at 0 (a point `x · size` for `x + size` is then
+    /// traced on the lit side).
     #[test]
     fn an_edge_pixel_is_the_lattice_fraction_it_covers() {
         for depth in 0..=4 {
             let s = (1u32 << depth) as f32;
             let want = ((0.3 * s).floor() + 0.5) / s;
-            for axis in ['x', 'y'] {
-                let (f, _) = edge_frame(axis, depth, 0.01);
-                // Bottom-left, inside in both cases: ambient 1 times diffuse 1,
-                // exactly (a wrong mean of a flat square would scale it).
-                let lit = f.color[7 * 8];
-                assert_eq!(lit, Vec3::ONE);
+            for (axis, e) in [('x', 0.3), ('y', 0.3), ('x', -3.7), ('y', -3.7)] {
+                let (f, _) = edge_frame(axis, e, depth, 0.01);
+                // Inside: ambient 1 times diffuse 1, exactly (a wrong mean of
+                // a flat square would scale it).
+                let lit = Vec3::ONE;
+                // The edge's column, or its row counted from the bottom.
+                let edge = (e + 4.0).floor() as i32;
                 for row in 0..8usize {
                     for col in 0..8usize {
                         // Position across the edge, in pixels from the edge's pixel.
                         let k = if axis == 'x' {
-                            col as i32 - 4
+                            col as i32 - edge
                         } else {
-                            3 - row as i32
+                            (7 - row as i32) - edge
                         };
                         let expect = match k {
                             ..=-1 => lit,
@@ -440,7 +444,7 @@ mod tests {
                         let got = f.color[row * 8 + col];
                         assert_eq!(
                             got, expect,
-                            "axis {axis} depth {depth} pixel ({col}, {row})"
+                            "axis {axis} at {e}, depth {depth}, pixel ({col}, {row})"
                         );
                     }
                 }
@@ -461,7 +465,7 @@ mod tests {
     #[test]
     fn only_the_squares_the_edge_crosses_are_split() {
         // Threshold 0: flat squares (spread exactly 0) are still not split.
-        let (f, c) = edge_frame('x', 3, 0.0);
+        let (f, c) = edge_frame('x', 0.3, 3, 0.0);
         for row in 0..8 {
             for col in 0..8 {
                 let want = if col == 4 { 35 } else { 4 };
@@ -469,7 +473,7 @@ mod tests {
             }
         }
         assert_eq!(c.primary, 308);
-        let (f, c) = edge_frame('x', 3, 2.0);
+        let (f, c) = edge_frame('x', 0.3, 3, 2.0);
         assert_eq!(c.primary, 81);
         assert!(f.samples.iter().all(|&n| n == 4));
         let lit = f.color[7 * 8];
