@@ -408,6 +408,44 @@ mod tests {
         assert!(lo < 0.3 && hi > 0.7, "times {lo}..{hi}");
     }
 
+    /// A moving camera is posed in world space: the rig turns a quarter
+    /// turn about world's y axis while the rendering space's origin lies at
+    /// world (100, 0, 0). The camera at rendering (0, 0, 5), world
+    /// (100, 0, 5), ends at world (5, 0, −100), rendering (−95, 0, −100),
+    /// looking along −x; at rest it stays where it was.
+    #[test]
+    fn a_moving_camera_is_posed_in_world_space() {
+        use crate::math::{Keyframe, Motion};
+        let cam = Camera::Perspective {
+            center: Vec3::new(0.0, 0.0, 5.0),
+            direction: Vec3::NEG_Z,
+            up: Vec3::Y,
+            angle_deg: 30.0,
+        };
+        let turned = Keyframe {
+            rotation: glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
+            ..Keyframe::identity(1.0)
+        };
+        let motion = Motion::new(vec![Keyframe::identity(0.0), turned]).unwrap();
+        let c =
+            CameraModel::new(&cam).with_motion(&cam, Arc::new(motion), DVec3::new(100.0, 0.0, 0.0));
+        let near = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-3;
+        let start = c.at_time(0.0);
+        assert!(
+            near(start.center, Vec3::new(0.0, 0.0, 5.0)),
+            "{:?}",
+            start.center
+        );
+        let end = c.at_time(1.0);
+        assert!(
+            near(end.center, Vec3::new(-95.0, 0.0, -100.0)),
+            "{:?}",
+            end.center
+        );
+        assert!(near(end.direction, Vec3::NEG_X), "{:?}", end.direction);
+        assert!(near(end.up, Vec3::Y), "{:?}", end.up);
+    }
+
     #[test]
     fn frame_is_orthonormal_for_skewed_up() {
         let c = CameraModel::new(&Camera::Perspective {
