@@ -446,6 +446,22 @@ mod tests {
         assert!(near(end.up, Vec3::Y), "{:?}", end.up);
     }
 
+    /// Depth is the signed distance along the viewing direction from the
+    /// centre plane, whatever the point's sideways offset.
+    #[test]
+    fn depth_is_measured_along_the_viewing_direction() {
+        let c = CameraModel::new(&Camera::Perspective {
+            center: Vec3::new(1.0, 2.0, 3.0),
+            direction: Vec3::new(0.0, 0.0, -2.0),
+            up: Vec3::Y,
+            angle_deg: 40.0,
+        });
+        assert_eq!(c.depth_of(Vec3::new(1.0, 2.0, -1.0)), 4.0);
+        assert_eq!(c.depth_of(Vec3::new(6.0, -5.0, -1.0)), 4.0);
+        assert_eq!(c.depth_of(Vec3::new(1.0, 2.0, 5.5)), -2.5);
+        assert_eq!(c.depth_of(Vec3::new(9.0, 2.0, 3.0)), 0.0);
+    }
+
     #[test]
     fn frame_is_orthonormal_for_skewed_up() {
         let c = CameraModel::new(&Camera::Perspective {
