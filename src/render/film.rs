@@ -297,6 +297,36 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
 mod tests {
     use super::*;
 
+    /// Half-open rectangles: a pixel is inside when both its column and its
+    /// row are; two rectangles overlap when they share a pixel in both
+    /// directions (touching edges share none).
+    #[test]
+    fn rectangles_contain_and_overlap_half_open() {
+        let r = Rect {
+            x0: 2,
+            row0: 3,
+            x1: 5,
+            row1: 7,
+        };
+        assert!(r.contains(2, 3) && r.contains(4, 6));
+        for (x, row) in [(5, 3), (1, 3), (2, 7), (2, 2), (5, 7), (9, 9)] {
+            assert!(!r.contains(x, row), "({x}, {row})");
+        }
+        let at = |x0, row0, x1, row1| Rect { x0, row0, x1, row1 };
+        assert!(r.overlaps(&at(4, 6, 9, 9)) && at(4, 6, 9, 9).overlaps(&r));
+        assert!(r.overlaps(&at(0, 0, 3, 4)) && r.overlaps(&r));
+        for o in [
+            at(5, 3, 8, 7), // touches the right edge
+            at(0, 3, 2, 7), // touches the left edge
+            at(2, 7, 5, 9), // touches the bottom
+            at(2, 0, 5, 3), // touches the top
+            at(3, 8, 4, 9), // columns shared, rows not
+            at(6, 4, 8, 5), // rows shared, columns not
+        ] {
+            assert!(!r.overlaps(&o) && !o.overlaps(&r), "{o:?}");
+        }
+    }
+
     #[test]
     fn tiles_cover_the_image_once() {
         for (w, h, s) in [(1, 1, 16), (33, 17, 16), (64, 64, 32), (5, 100, 7)] {
