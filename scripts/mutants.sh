@@ -97,8 +97,12 @@ if ! git diff --quiet -- src; then
 fi
 
 # The unit stage builds the library's tests only, not the suite binary.
-binaries=(--lib --test suite)
-[ "${MUTANTS_STAGE:-}" = unit ] && binaries=(--lib)
+# They go to every cargo call (--cargo-arg), the build's too: cargo-mutants's build
+# step (`nextest run --no-run`) otherwise builds every target, the two
+# binaries and their tests included, which tripled a unit-stage mutant's
+# build time (13.4 s against 4.4 s for the library's tests alone).
+binaries=(--cargo-arg=--lib --cargo-arg=--test --cargo-arg=suite)
+[ "${MUTANTS_STAGE:-}" = unit ] && binaries=(--cargo-arg=--lib)
 
 for target in "$@"; do
   if [ -f "$target" ]; then
@@ -115,7 +119,7 @@ for target in "$@"; do
   # shellcheck disable=SC2086,SC2046
   cargo mutants --in-place --profile mutants --test-tool nextest \
     --timeout "${MUTANTS_TIMEOUT:-240}" ${MUTANTS_ARGS:-} \
-    "${files[@]}" --output "mutants/$name" -- "${binaries[@]}" -E "$(filter_for "$target")" || true
+    "${binaries[@]}" "${files[@]}" --output "mutants/$name" -- -E "$(filter_for "$target")" || true
   for kind in caught missed timeout unviable; do
     f="mutants/$name/mutants.out/$kind.txt"
     printf '%-9s %s\n' "$kind" "$( [ -f "$f" ] && wc -l < "$f" || echo 0)"
