@@ -391,6 +391,16 @@ mod tests {
         assert!(c.x > 2.0 && c.x < 4.0, "{c}");
     }
 
+    /// A pixel no sample reaches with a positive weight is black, not
+    /// `0/0`: samples at pixel corners through a tent of radius 0.6 (which
+    /// reaches neighbours, the merge's summing path) are `√½ > 0.6` from
+    /// every pixel centre.
+    #[test]
+    fn a_pixel_without_weight_is_black() {
+        let f = splat_every_pixel((5, 4), 2, Filter::Tent(0.6), Vec2::ZERO, |_, _| Vec3::ONE);
+        assert!(f.color.iter().all(|&c| c == Vec3::ZERO), "{:?}", f.color);
+    }
+
     /// Closed form of the splat's direction conventions: every pixel holds
     /// one sample at offset `o = (0.3, 0.6)` (y up) coloured by its column
     /// and its row. An interior pixel `(x, row)` receives the sample of the
