@@ -7,6 +7,7 @@
 #   MUTANTS_ARGS="--shard 0/4" scripts/mutants.sh accel   # a quarter of one
 #   MUTANTS_STAGE=unit scripts/mutants.sh render   # unit tests only, then
 #   MUTANTS_ARGS=--iterate scripts/mutants.sh render   # the rest on the misses
+#   MUTANTS_EXCLUDE_RE='mod\.rs:169:34:' ...            # minus explained ones
 #
 # Needs `cargo install cargo-mutants` and cargo-nextest (and uses the mold
 # linker when it is installed). Not part of CI: every mutant rebuilds the
@@ -104,6 +105,11 @@ fi
 binaries=(--cargo-arg=--lib --cargo-arg=--test --cargo-arg=suite)
 [ "${MUTANTS_STAGE:-}" = unit ] && binaries=(--cargo-arg=--lib)
 
+# MUTANTS_EXCLUDE_RE leaves out mutants already explained (e.g. equivalent
+# ones, which would only run the second stage's whole selection to survive).
+exclude=()
+[ -n "${MUTANTS_EXCLUDE_RE:-}" ] && exclude=(--exclude-re "$MUTANTS_EXCLUDE_RE")
+
 for target in "$@"; do
   if [ -f "$target" ]; then
     files=(-f "$target")
@@ -119,7 +125,7 @@ for target in "$@"; do
   # shellcheck disable=SC2086,SC2046
   cargo mutants --in-place --profile mutants --test-tool nextest \
     --timeout "${MUTANTS_TIMEOUT:-240}" ${MUTANTS_ARGS:-} \
-    "${binaries[@]}" "${files[@]}" --output "mutants/$name" -- -E "$(filter_for "$target")" || true
+    "${binaries[@]}" "${exclude[@]}" "${files[@]}" --output "mutants/$name" -- -E "$(filter_for "$target")" || true
   for kind in caught missed timeout unviable; do
     f="mutants/$name/mutants.out/$kind.txt"
     printf '%-9s %s\n' "$kind" "$( [ -f "$f" ] && wc -l < "$f" || echo 0)"
