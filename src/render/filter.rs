@@ -215,6 +215,19 @@ mod tests {
         );
         assert!("box".parse::<Filter>().is_err());
         assert!("box:-1".parse::<Filter>().is_err());
+        assert_eq!("box:0.5".parse::<Filter>().unwrap(), Filter::Box(0.5));
+        assert_eq!("box:64".parse::<Filter>().unwrap(), Filter::Box(64.0));
+        // Greater than 0, at most 64.
+        for bad in [
+            "box:0",
+            "tent:0",
+            "gaussian:0",
+            "box:64.01",
+            "tent:inf",
+            "box:nan",
+        ] {
+            assert!(bad.parse::<Filter>().is_err(), "{bad}");
+        }
         assert!("mitchell:1".parse::<Filter>().is_err());
     }
 }

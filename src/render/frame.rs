@@ -81,3 +81,28 @@ impl Frame {
         self.normal.iter().map(|&n| normal_rgb(n)).collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The depth and normals images are per-pixel maps of the planes, in
+    /// pixel order: a frame of misses starts black in both.
+    #[test]
+    fn depth_and_normals_images_map_each_pixel() {
+        let mut f = Frame::new(3, 1);
+        assert_eq!(f.depth_image(1.0, 2.0), vec![Vec3::ZERO; 3]);
+        assert_eq!(f.normals_image(), vec![Vec3::ZERO; 3]);
+        f.depth[0] = 1.25;
+        f.depth[2] = 1.0;
+        f.normal[1] = Vec3::new(0.0, -0.6, 0.8);
+        assert_eq!(
+            f.depth_image(1.0, 2.0),
+            vec![Vec3::splat(0.75), Vec3::ZERO, Vec3::ONE]
+        );
+        assert_eq!(
+            f.normals_image(),
+            vec![Vec3::ZERO, Vec3::new(0.0, 0.6, 0.8), Vec3::ZERO]
+        );
+    }
+}

@@ -62,3 +62,31 @@ pub fn render_rows(
         });
     (frame, counters)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{render_image, Control, Settings};
+
+    /// At one ray a pixel, the old loop gives the current loop's frame
+    /// (colour, depth, normal, sample counts), rows in the same order, on an
+    /// asymmetric scene at two offsets (`tests/sampling.rs` checks the
+    /// course's scenes).
+    #[test]
+    fn the_old_loop_gives_the_current_loop_s_frame() {
+        let (world, camera) = super::super::tests::small_world();
+        let it = Whitted::default();
+        let size = (37, 21);
+        for offset in [PixelOffset::CENTER, PixelOffset(crate::math::Vec2::ZERO)] {
+            let (old, _) = render_rows(&world, &camera, &it, size, offset);
+            let settings = Settings::one_ray(size, offset);
+            let new = render_image(&world, &camera, &it, &settings, Control::default()).frame;
+            assert_eq!(old.color, new.color);
+            assert_eq!(old.depth, new.depth);
+            assert_eq!(old.normal, new.normal);
+            assert_eq!(old.samples, new.samples);
+            assert!(old.is_complete());
+            assert!(old.depth.iter().any(|d| d.is_finite()));
+        }
+    }
+}

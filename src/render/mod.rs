@@ -525,7 +525,7 @@ mod tests {
 
     /// A lit triangle in front of an orthographic camera, tilted (its depth
     /// varies across a pixel).
-    fn small_world() -> (World, CameraModel) {
+    pub(super) fn small_world() -> (World, CameraModel) {
         let src = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 4 }
              Lights { numLights 0 }
              Background { color 0 0 0 ambientLight 1 1 1 }

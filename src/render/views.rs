@@ -227,6 +227,58 @@ mod tests {
         assert_eq!(img.pixels[(6 * 8 + 6) as usize], Vec3::X);
     }
 
+    /// Every pixel of a samples view, from the image coordinates alone: a
+    /// checkerboard of `z×z` blocks (grey where the pixel's `i + j` is
+    /// even), and each sample at `⌊(i + s)·z⌋` in its colour. An odd width
+    /// and an even height, so neither is a multiple of the other.
+    #[test]
+    fn samples_view_pixels_are_the_checkers_and_samples() {
+        let (w, h, z) = (3u32, 2u32, 4u32);
+        let s = [
+            SampleRecord {
+                pixel: (2, 1),
+                offset: Vec2::new(0.3, 0.8),
+                color: Vec3::X,
+            },
+            SampleRecord {
+                pixel: (0, 0),
+                offset: Vec2::new(0.99, 0.0),
+                color: Vec3::Y,
+            },
+        ];
+        let img = samples_view(w, h, z, &s);
+        let (iw, ih) = (w * z, h * z);
+        assert_eq!((img.width, img.height), (iw, ih));
+        for y in 0..ih {
+            for x in 0..iw {
+                let want = match (x, y) {
+                    (9, 7) => Vec3::X, // (2 + 0.3)·4 = 9.2, (1 + 0.8)·4 = 7.2
+                    (3, 0) => Vec3::Y, // 0.99·4 = 3.96
+                    _ if (x / z + y / z) % 2 == 0 => Vec3::splat(0.2),
+                    _ => Vec3::ZERO,
+                };
+                let got = img.pixels[((ih - 1 - y) * iw + x) as usize];
+                assert_eq!(got, want, "({x}, {y}) from the bottom left");
+            }
+        }
+    }
+
+    /// Pixels outside the image are ignored, whether counted from the
+    /// bottom or from the top.
+    #[test]
+    fn pixels_outside_the_image_are_ignored() {
+        let mut img = Image::new(3, 2, Vec3::ZERO);
+        for (x, y) in [(3, 0), (0, 2), (3, 2), (7, 1)] {
+            img.put_up(x, y, Vec3::ONE);
+            img.put(x, y, Vec3::ONE);
+        }
+        assert!(img.pixels.iter().all(|&p| p == Vec3::ZERO));
+        img.put_up(2, 1, Vec3::X);
+        img.put(2, 1, Vec3::Y);
+        assert_eq!(img.pixels[2], Vec3::X); // top right
+        assert_eq!(img.pixels[5], Vec3::Y); // bottom right
+    }
+
     #[test]
     fn filter_view_box_is_one_pixel_of_white() {
         let img = filter_view(&Filter::Box(0.5), 3, 3, 4);
@@ -242,26 +294,30 @@ mod tests {
     /// sub-pixel's offset from the centre pixel's centre within the support
     /// (one pixel around the centre for a radius of 1.5), dark blue beyond.
     /// A 5x3 image: the centre is (2, 1), and the support reaches the
-    /// bottom and top rows.
+    /// bottom and top rows. And a 4x6 image: the centre is (2, 3)
+    /// (`⌊w/2⌋, ⌊h/2⌋`, which odd sizes alone would not tell from `w mod 2`).
     #[test]
     fn filter_view_pixels_are_the_weights_at_their_offsets() {
-        let (w, h, z) = (5u32, 3u32, 4u32);
+        let z = 4u32;
         let tent = Filter::Tent(1.5);
-        let img = filter_view(&tent, w, h, z);
-        let (iw, ih) = (w * z + 1, h * z + 1);
-        assert_eq!((img.width, img.height), (iw, ih));
-        for y in 0..ih {
-            for x in 0..iw {
-                let want = if x % z == 0 || y % z == 0 {
-                    Vec3::new(0.0, 0.0, 1.0)
-                } else if (x / z).abs_diff(2) <= 1 && (y / z).abs_diff(1) <= 1 {
-                    let (dx, dy) = (x as f32 / 4.0 - 2.5, y as f32 / 4.0 - 1.5);
-                    Vec3::splat(tent.weight(dx, dy))
-                } else {
-                    Vec3::new(0.0, 0.0, 0.5)
-                };
-                let got = img.pixels[((ih - 1 - y) * iw + x) as usize];
-                assert_eq!(got, want, "({x}, {y}) from the bottom left");
+        for ((w, h), (cx, cy)) in [((5u32, 3u32), (2u32, 1u32)), ((4, 6), (2, 3))] {
+            let img = filter_view(&tent, w, h, z);
+            let (iw, ih) = (w * z + 1, h * z + 1);
+            assert_eq!((img.width, img.height), (iw, ih));
+            for y in 0..ih {
+                for x in 0..iw {
+                    let want = if x % z == 0 || y % z == 0 {
+                        Vec3::new(0.0, 0.0, 1.0)
+                    } else if (x / z).abs_diff(cx) <= 1 && (y / z).abs_diff(cy) <= 1 {
+                        let dx = x as f32 / 4.0 - (cx as f32 + 0.5);
+                        let dy = y as f32 / 4.0 - (cy as f32 + 0.5);
+                        Vec3::splat(tent.weight(dx, dy))
+                    } else {
+                        Vec3::new(0.0, 0.0, 0.5)
+                    };
+                    let got = img.pixels[((ih - 1 - y) * iw + x) as usize];
+                    assert_eq!(got, want, "{w}x{h}: ({x}, {y}) from the bottom left");
+                }
             }
         }
     }
