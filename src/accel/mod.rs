@@ -28,6 +28,8 @@
 //!   formula for the start cell and for every step, so consecutive cells share
 //!   their boundary `t` exactly and none is skipped.
 
+#[cfg(test)]
+mod aggregate_tests;
 mod brute;
 pub mod bvh;
 pub mod bvh4;
@@ -131,8 +133,7 @@ pub trait Aggregate: Send + Sync {
     fn describe(&self) -> String;
 
     /// Bytes of the structure itself (nodes, cells, id lists; not the
-    /// primitives), for `glint bench`. 0 when an aggregate does not say.
-    fn memory_bytes(&self) -> usize {
-        0
-    }
+    /// primitives), for `glint bench`. Required: a default of 0 let the
+    /// fast BVH report no memory at all (a mutation run found it).
+    fn memory_bytes(&self) -> usize;
 }

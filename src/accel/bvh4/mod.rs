@@ -258,6 +258,10 @@ impl Aggregate for Bvh4 {
         self.any_except(prims, ray, tmin, tmax, except, c)
     }
 
+    fn memory_bytes(&self) -> usize {
+        Bvh4::memory_bytes(self)
+    }
+
     fn bounds(&self) -> Aabb {
         self.bounds
     }

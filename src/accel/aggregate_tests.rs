@@ -1,0 +1,85 @@
+//! What every aggregate promises beyond its hits (the agreement tests
+//! check those): the barycentric query and the query that may skip a
+//! primitive answer as the plain ones do, the bounds hold every primitive,
+//! the structure reports its memory, and brute force counts its tests.
+
+use super::testutil::{ray, soup, Rng};
+use super::{Aggregate, Brute, Bvh, Bvh4, Grid, NestedGrid, Octree, Split, Storage};
+use crate::math::{Aabb, Ray, Vec3};
+use crate::primitive::Primitive;
+use crate::stats::Counters;
+
+/// Every aggregate over all of `p` (the scene hierarchy's BVH has its own
+/// tests: it needs a scene tree).
+fn every_aggregate(p: &[Primitive]) -> Vec<(&'static str, Box<dyn Aggregate>)> {
+    let ids = || (0..p.len() as u32).collect::<Vec<_>>();
+    vec![
+        ("none", Box::new(Brute::new(p, ids()))),
+        ("grid", Box::new(Grid::new(p, ids(), None))),
+        ("octree", Box::new(Octree::new(p, ids()))),
+        (
+            "octree-inner",
+            Box::new(Octree::with_storage(p, ids(), Storage::Inner)),
+        ),
+        ("bvh-sah", Box::new(Bvh::new(p, ids(), Split::Sah))),
+        ("nested-grid", Box::new(NestedGrid::new(p, ids(), 16, 2))),
+        ("bvh4", Box::new(Bvh4::new(p, ids()))),
+    ]
+}
+
+#[test]
+fn every_aggregate_keeps_the_trait_s_promises() {
+    let prims = soup(3, 400);
+    let all = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
+    for (name, a) in every_aggregate(&prims) {
+        let b = a.bounds();
+        assert!(
+            b.min.cmple(all.min).all() && b.max.cmpge(all.max).all(),
+            "{name}: {b:?} does not hold {all:?}"
+        );
+        assert!(a.memory_bytes() >= 4 * prims.len(), "{name}");
+        let mut r = Rng::new(5);
+        let mut hits = 0;
+        for _ in 0..400 {
+            let ray = ray(&mut r);
+            let mut c = Counters::default();
+            let inf = f32::INFINITY;
+            let h = a.intersect(&prims, &ray, 0.0, inf, &mut c);
+            let hb = a.intersect_barycentric(&prims, &ray, 0.0, inf, &mut c);
+            assert_eq!(h, hb.map(|(h, _)| h), "{name}");
+            let o = a.occluded(&prims, &ray, 0.0, inf, &mut c);
+            assert_eq!(o, h.is_some(), "{name}");
+            // `u32::MAX` is no primitive: nothing may be skipped.
+            let oe = a.occluded_except(&prims, &ray, 0.0, inf, u32::MAX, &mut c);
+            assert_eq!(o, oe, "{name}");
+            hits += usize::from(o);
+        }
+        // Both answers occur.
+        assert!((40..360).contains(&hits), "{name}: {hits} of 400 rays hit");
+    }
+}
+
+/// Brute force tests every primitive for a closest hit, and primitives in
+/// order up to the first that blocks a shadow ray (all of them on a miss).
+#[test]
+fn brute_force_counts_every_test() {
+    let prims = soup(4, 200);
+    let n = prims.len() as u64;
+    let brute = Brute::new(&prims, (0..n as u32).collect());
+    let mut r = Rng::new(9);
+    let miss = Ray::new(Vec3::splat(100.0), Vec3::X);
+    let mut rays: Vec<Ray> = (0..50).map(|_| ray(&mut r)).collect();
+    rays.push(miss);
+    for ray in rays {
+        let first = prims
+            .iter()
+            .position(|p| p.shape.intersect(&ray, 0.0, f32::INFINITY).is_some());
+        let mut c = Counters::default();
+        brute.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+        assert_eq!(c.intersection_tests, n);
+        let mut c = Counters::default();
+        let blocked = brute.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+        assert_eq!(blocked, first.is_some());
+        assert_eq!(c.intersection_tests, first.map_or(n, |i| i as u64 + 1));
+    }
+}
