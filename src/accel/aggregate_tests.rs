@@ -1,7 +1,8 @@
 //! What every aggregate promises beyond its hits (the agreement tests
 //! check those): the barycentric query and the query that may skip a
 //! primitive answer as the plain ones do, the bounds hold every primitive,
-//! the structure reports its memory, and brute force counts its tests.
+//! the structure reports its memory and its name, and brute force counts
+//! its tests.
 
 use super::testutil::{ray, soup, Rng};
 use super::{Aggregate, Brute, Bvh, Bvh4, Grid, NestedGrid, Octree, Split, Storage};
@@ -22,7 +23,10 @@ fn every_aggregate(p: &[Primitive]) -> Vec<(&'static str, Box<dyn Aggregate>)> {
             Box::new(Octree::with_storage(p, ids(), Storage::Inner)),
         ),
         ("bvh-sah", Box::new(Bvh::new(p, ids(), Split::Sah))),
-        ("nested-grid", Box::new(NestedGrid::new(p, ids(), 16, 2))),
+        (
+            "nested-grid:16:2",
+            Box::new(NestedGrid::new(p, ids(), 16, 2)),
+        ),
         ("bvh4", Box::new(Bvh4::new(p, ids()))),
     ]
 }
@@ -38,6 +42,12 @@ fn every_aggregate_keeps_the_trait_s_promises() {
             "{name}: {b:?} does not hold {all:?}"
         );
         assert!(a.memory_bytes() >= 4 * prims.len(), "{name}");
+        // Statistics name the structure first (`--accel`'s spelling).
+        let d = a.describe();
+        assert!(
+            d == name || d.starts_with(&format!("{name} ")),
+            "{name}: {d}"
+        );
         let mut r = Rng::new(5);
         let mut hits = 0;
         for _ in 0..400 {
