@@ -93,3 +93,43 @@ fn brute_force_counts_every_test() {
         assert_eq!(c.intersection_tests, first.map_or(n, |i| i as u64 + 1));
     }
 }
+
+/// The memory the textbook structures report is their layout's: a BVH's
+/// 32-byte nodes and one 4-byte id per primitive; a grid's `cells + 1`
+/// offsets and its references, 4 bytes each. And their visiting queries
+/// (what the traversal views draw) return the plain query's hit.
+#[test]
+fn textbook_structures_report_their_layout_and_visit_to_the_same_hit() {
+    let prims = soup(6, 300);
+    let n = prims.len();
+    let ids = || (0..n as u32).collect::<Vec<_>>();
+    let bvh = Bvh::new(&prims, ids(), Split::Sah);
+    assert_eq!(std::mem::size_of::<super::bvh::Node>(), 32);
+    assert_eq!(bvh.ids().len(), n);
+    assert_eq!(bvh.memory_bytes(), 32 * bvh.nodes().len() + 4 * n);
+    let grid = Grid::new(&prims, ids(), None);
+    assert!(grid.references() >= n);
+    let cells = grid.lattice().cells();
+    assert_eq!(grid.memory_bytes(), 4 * (cells + 1 + grid.references()));
+    let mut r = Rng::new(2);
+    let mut visited_hits = 0;
+    for _ in 0..200 {
+        let ray = ray(&mut r);
+        let inf = f32::INFINITY;
+        let mut c = Counters::default();
+        let want = bvh.intersect(&prims, &ray, 0.0, inf, &mut c);
+        let mut entered = 0;
+        let got = bvh.intersect_visiting(&prims, &ray, 0.0, inf, &mut c, |v| {
+            entered += usize::from(v.entered);
+        });
+        assert_eq!(got, want);
+        if got.is_some() {
+            assert!(entered > 0);
+            visited_hits += 1;
+        }
+        let want = grid.intersect(&prims, &ray, 0.0, inf, &mut c);
+        let got = grid.intersect_visiting(&prims, &ray, 0.0, inf, &mut c, |_| {});
+        assert_eq!(got, want);
+    }
+    assert!(visited_hits > 20);
+}
