@@ -293,6 +293,31 @@ mod tests {
         }
     }
 
+    /// Degenerate triangles (one point, collinear points, a NaN or an
+    /// infinite vertex) are left out of the build: a non-finite one would
+    /// poison the bounds the whole tree is binned in. The rest of the soup
+    /// still gives brute force's hits, and the tree's bounds stay finite.
+    #[test]
+    fn degenerate_triangles_are_left_out() {
+        use crate::accel::testutil::prim;
+        use crate::shape::{Shape, Triangle};
+        let mut prims = soup(5, 500);
+        let a = Vec3::new(1.0, 2.0, 3.0);
+        for v in [
+            [a, a, a],
+            [a, a * 2.0, a * 3.0],
+            [a, Vec3::NAN, a * 2.0],
+            [a, Vec3::INFINITY, -a],
+        ] {
+            let t = Triangle::new(v[0], v[1], v[2]);
+            assert!(t.is_degenerate());
+            prims.push(prim(Shape::Triangle(t)));
+        }
+        let b = Bvh4::new(&prims, all(&prims));
+        assert!(b.bounds().is_finite());
+        assert_agrees(&b, &prims, 3000);
+    }
+
     /// The tree's SAH cost, from its stored boxes: the root step, plus for
     /// every child box its surface area relative to the root's, times 1 for
     /// a node and times its number of 4-triangle blocks for a leaf.
