@@ -450,6 +450,51 @@ mod tests {
         }
     }
 
+    /// A tree deeper than the shallow stack serves gets the deep one, and a
+    /// ray that needs it gets through. Triangles at x = 1.2^k (k < 400),
+    /// all of one shape across the x axis, make a chain: binned over the
+    /// whole range, every split peels off the few largest, so each node
+    /// holds a child with the rest. A ray along the x axis from the small
+    /// end passes through every box and hits no triangle (each covers
+    /// y + z ≥ 1/2 of its box), so it visits the chain child first and
+    /// keeps every other child of every level pending: more entries than
+    /// the shallow stack holds (with it, the walk indexes entry 64 of 64).
+    /// Also the memory and node count reported.
+    #[test]
+    fn a_deep_tree_uses_the_deep_stack() {
+        use crate::accel::testutil::prim;
+        use crate::shape::{Shape, Triangle};
+        let prims: Vec<Primitive> = (0..400)
+            .map(|k| {
+                let x = 1.2f32.powi(k);
+                let v = |y: f32, z: f32| Vec3::new(x, y, z);
+                prim(Shape::Triangle(Triangle::new(
+                    v(-0.5, 1.0),
+                    v(1.0, 1.0),
+                    v(1.0, -0.5),
+                )))
+            })
+            .collect();
+        let b = Bvh4::new(&prims, all(&prims));
+        let d = build::depth(&b.nodes);
+        assert!(d > traverse::SHALLOW_DEPTH, "depth {d}");
+        assert!(b.deep);
+        let ray = Ray::new(Vec3::new(0.5, 0.0, 0.0), Vec3::X);
+        let mut c = Counters::default();
+        assert!(b
+            .intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c)
+            .is_none());
+        assert!(!b.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c));
+        // It tested every triangle, so it entered every leaf.
+        assert_eq!(c.intersection_tests, 2 * 400, "{c:?}");
+        let back = Ray::new(Vec3::new(0.5, 0.9, 0.9), Vec3::X);
+        assert!(b
+            .intersect(&prims, &back, 0.0, f32::INFINITY, &mut c)
+            .is_some());
+        assert_eq!(b.memory_bytes(), 256 * b.node_count() + 160 * b.tris.len());
+        assert!(b.node_count() > d);
+    }
+
     /// The barycentrics the traversal hands out are the ones the world's
     /// `Triangle::surface` would re-run the test for, bit for bit (and a
     /// fallback item, the soup's spheres, has none).
