@@ -109,6 +109,8 @@ fn a_transform_node_carries_the_ray_once() {
     }]);
     let h = HierarchyBvh::new(&prims, all(&prims), &tree);
     assert_eq!(h.spaces(), 1);
+    assert_layout(&h);
+    assert!(h.describe().ends_with(", 1 carrying transforms"));
     assert!(matches!(
         h.nodes[0].kind,
         Kind::Inner {
@@ -151,4 +153,69 @@ fn empty_tree_and_no_ids() {
     assert!(h
         .intersect(&[], &q, 0.0, f32::INFINITY, &mut Counters::default())
         .is_none());
+}
+
+/// Depth of the deepest leaf below node `k`, walked from the node array.
+fn depth_below(h: &HierarchyBvh, k: usize) -> usize {
+    match h.nodes[k].kind {
+        Kind::Leaf { .. } => 0,
+        Kind::Inner { first, count, .. } => {
+            1 + (first..first + count)
+                .map(|c| depth_below(h, c as usize))
+                .max()
+                .expect("inner nodes have children")
+        }
+    }
+}
+
+/// The memory an aggregate reports is its layout's: the nodes, a 4-byte id
+/// per primitive and a matrix per carrying transform.
+fn assert_layout(h: &HierarchyBvh) {
+    assert_eq!(
+        h.memory_bytes(),
+        h.nodes.len() * std::mem::size_of::<Node>() + 4 * h.ids.len() + 64 * h.spaces()
+    );
+}
+
+/// What the hierarchy reports about itself (node count, depth, bounds,
+/// name, memory) is what it holds, and its visiting query (the traversal
+/// view's) finds the plain query's hit, telling the boxes it enters.
+#[test]
+fn reports_its_shape_and_visits_to_the_same_hit() {
+    let prims = soup(36, 300);
+    let h = HierarchyBvh::new(&prims, all(&prims), &chunked(prims.len() as u32, 7));
+    assert_eq!(h.node_count(), h.nodes.len());
+    assert!(h.node_count() > 10);
+    assert_eq!(h.depth(), depth_below(&h, 0));
+    assert!(h.depth() >= 3, "{}", h.depth());
+    let all_boxes = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
+    let b = h.bounds();
+    assert!(b.min.cmple(all_boxes.min).all() && b.max.cmpge(all_boxes.max).all());
+    assert_eq!(
+        h.describe(),
+        format!(
+            "bvh-hierarchy {} nodes, depth {}, 0 carrying transforms",
+            h.node_count(),
+            h.depth()
+        )
+    );
+    assert_layout(&h);
+    let mut r = Rng::new(37);
+    let (mut hits, mut leaves) = (0, 0);
+    for _ in 0..300 {
+        let q = ray(&mut r);
+        let mut c = Counters::default();
+        let want = h.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c);
+        let mut entered = 0;
+        let got = h.intersect_visiting(&prims, &q, 0.0, f32::INFINITY, &mut c, |v| {
+            entered += usize::from(v.entered);
+            leaves += usize::from(v.leaf && v.entered);
+        });
+        assert_eq!(got, want);
+        if got.is_some() {
+            assert!(entered > 0);
+            hits += 1;
+        }
+    }
+    assert!(hits > 30 && leaves > 30, "{hits} hits, {leaves} leaves");
 }
