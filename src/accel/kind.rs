@@ -206,6 +206,17 @@ mod tests {
             res: Some([1, 2, 3]),
         };
         assert_eq!(fixed.to_string().parse::<AccelKind>(), Ok(fixed));
+        // Default parameters print as the short name the user typed.
+        for (kind, name) in [
+            (AccelKind::NESTED_GRID, "nested-grid"),
+            (AccelKind::OctreeInner, "octree-inner"),
+            (AccelKind::BvhHierarchy, "bvh-hierarchy"),
+            (AccelKind::Bvh(Split::Midpoint), "bvh-midpoint"),
+            (AccelKind::Bvh4, "bvh4"),
+            (fixed, "grid:1x2x3"),
+        ] {
+            assert_eq!(kind.to_string(), name);
+        }
     }
 
     #[test]

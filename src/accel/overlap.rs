@@ -104,6 +104,27 @@ mod tests {
         Aabb::new(Vec3::ZERO, Vec3::ONE)
     }
 
+    /// Closed boxes: touching faces overlap; a gap along any one axis, on
+    /// either side, separates them.
+    #[test]
+    fn boxes_overlap_when_they_share_a_point() {
+        let a = unit_box();
+        assert!(boxes_overlap(&a, &a));
+        let inside = Aabb::new(Vec3::splat(0.25), Vec3::splat(0.5));
+        assert!(boxes_overlap(&a, &inside) && boxes_overlap(&inside, &a));
+        for axis in 0..3 {
+            let mut step = Vec3::ZERO;
+            step[axis] = 1.0;
+            let touching = Aabb::new(a.min + step, a.max + step);
+            assert!(boxes_overlap(&a, &touching) && boxes_overlap(&touching, &a));
+            for s in [1.5, -1.5] {
+                let apart = Aabb::new(a.min + step * s, a.max + step * s);
+                assert!(!boxes_overlap(&a, &apart), "axis {axis}, {s}");
+                assert!(!boxes_overlap(&apart, &a), "axis {axis}, {s}");
+            }
+        }
+    }
+
     #[test]
     fn diagonal_triangle_misses_a_corner_box_its_bounds_cover() {
         // Triangle near the plane x + y = 4 spans [0,4]² but misses [0,1]².
