@@ -417,6 +417,13 @@ mod tests {
         for (k, &c) in g.top.child.iter().enumerate() {
             let n = (g.top.offsets[k + 1] - g.top.offsets[k]) as usize;
             assert!(c > 0 || n <= 3, "cell {k} kept {n} primitives");
+            // Two points cost more in a finer grid (its cells) than in a list.
+            if c > 0 {
+                let mut ids = g.top.children[c as usize - 1].items.clone();
+                ids.sort_unstable();
+                ids.dedup();
+                assert!(ids.len() > 2, "cell {k}: a finer grid for {}", ids.len());
+            }
         }
         assert!(g.subgrids() >= 20, "{} finer grids", g.subgrids());
         assert_agrees(&g, &prims, 2000);
@@ -450,6 +457,112 @@ mod tests {
         let bound = (g.top.lattice.cells() * (prims.len() + 3)) * 4 + 4;
         assert!(g.memory_bytes() <= bound, "{} bytes", g.memory_bytes());
         assert_agrees(&g, &prims, 500);
+    }
+
+    /// A finer grid is built exactly when a ray is expected to test fewer
+    /// primitives in it than in the list: over a cube cut 3×3×3 (4 points
+    /// make `round(2·∛4) = 3` cells an axis), Σ area(c)/area·(1 + n_c) =
+    /// (27 + entries)/9 against 4, which pays with 8 entries and not with 9
+    /// (tiny spheres on a cell face count in 2 cells, on an edge in 4).
+    #[test]
+    fn a_finer_grid_is_built_exactly_when_its_cost_is_below_the_list_s() {
+        let third = 1.0 / 3.0;
+        let at = |x: f32, y: f32| sphere(Vec3::new(x, y, 0.5), 1e-3);
+        let entries_8 = vec![
+            at(third, 0.1),
+            at(third, 0.5),
+            at(0.5, third),
+            at(0.9, third),
+        ];
+        let entries_9 = vec![
+            at(third, third),
+            at(third, 0.9),
+            at(0.9, 2.0 * third),
+            at(0.5, 0.5),
+        ];
+        let region = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        for (prims, pays) in [(entries_8, true), (entries_9, false)] {
+            let b = Builder {
+                prims: &prims,
+                margin: 1e-5,
+                threshold: 1,
+            };
+            let ids = all(&prims);
+            let lattice = Lattice::new(region, [3, 3, 3]);
+            let entries = box_entries(&prims, &ids, &lattice, b.margin);
+            assert_eq!(entries, if pays { 8 } else { 9 });
+            let level = b.level(region, &ids, FINE_DENSITY, 0, true);
+            assert_eq!(level.is_some(), pays, "{entries} entries");
+            if let Some(l) = level {
+                assert_eq!(l.lattice.res, [3, 3, 3]);
+            }
+        }
+    }
+
+    /// The sum of `f` over every level.
+    fn sum_levels(l: &Level, f: &impl Fn(&Level) -> usize) -> usize {
+        f(l) + l.children.iter().map(|c| sum_levels(c, f)).sum::<usize>()
+    }
+
+    /// Levels of finer grids below `l`.
+    fn levels_below(l: &Level) -> u32 {
+        l.children
+            .iter()
+            .map(|c| 1 + levels_below(c))
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// What the grid reports (cells, coarse resolution, memory, name) is
+    /// what its levels hold; no grid nests deeper than asked; and the walk
+    /// marks the cells holding a finer grid, each followed by a cell of it.
+    #[test]
+    fn reports_what_it_holds_and_nests_no_deeper_than_asked() {
+        let prims = soup(23, 1200);
+        let mut finer_seen = 0;
+        for (threshold, depth) in [(4, 1), (2, 2), (1, 3)] {
+            let g = NestedGrid::new(&prims, all(&prims), threshold, depth);
+            let levels = levels_below(&g.top);
+            assert!((1..=depth).contains(&levels), "{levels} levels");
+            let [x, y, z] = g.coarse_res();
+            assert_eq!(g.coarse_res(), g.top.lattice.res);
+            assert!(x > 1 && y > 1 && z > 1);
+            let cells = sum_levels(&g.top, &|l| l.lattice.cells());
+            assert_eq!(g.cells(), cells);
+            assert!(cells > (x * y * z) as usize);
+            // Per level: `cells + 1` offsets, a child slot per cell, the items.
+            let items = sum_levels(&g.top, &|l| l.items.len());
+            let grids = 1 + g.subgrids();
+            assert_eq!(g.memory_bytes(), 4 * (2 * cells + grids + items));
+            assert_eq!(
+                g.describe(),
+                format!(
+                    "nested-grid:{threshold}:{depth} {x}x{y}x{z}, {} finer grids, {cells} cells",
+                    g.subgrids()
+                )
+            );
+            let mut r = crate::accel::testutil::Rng::new(24);
+            for _ in 0..200 {
+                let q = crate::accel::testutil::ray(&mut r);
+                let mut seen = Vec::new();
+                let mut c = Counters::default();
+                let got =
+                    g.intersect_visiting(&prims, &q, 0.0, f32::INFINITY, &mut c, |v| seen.push(*v));
+                let want = g.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c);
+                assert_eq!(got, want);
+                for w in seen.windows(2) {
+                    if w[0].finer {
+                        let outer = crate::accel::overlap::padded(&w[0].bounds, 1e-4);
+                        let inner = w[1].bounds;
+                        assert!(
+                            outer.min.cmple(inner.min).all() && inner.max.cmple(outer.max).all()
+                        );
+                        finer_seen += 1;
+                    }
+                }
+            }
+        }
+        assert!(finer_seen > 10, "{finer_seen}");
     }
 
     #[test]
