@@ -350,6 +350,16 @@ mod tests {
         assert_eq!(o.node_count(), 9);
         assert_eq!(o.depth(), 1);
         assert_eq!(o.references(), 64);
+        assert_eq!(o.inner_references(), 0);
+        // The drawing's boxes: the root, then its eight octants as leaves.
+        let boxes = o.node_boxes();
+        assert_eq!(boxes[0], (o.root_bounds(), 0, false));
+        assert_eq!(boxes.len(), 9);
+        let octant = o.root_bounds().extent() * 0.5;
+        for &(b, d, leaf) in &boxes[1..] {
+            assert!(leaf && d == 1);
+            assert!((b.extent() - octant).abs().max_element() < 1e-5);
+        }
         assert_eq!(
             o.nodes[0],
             Node::Inner {
@@ -412,6 +422,37 @@ mod tests {
     fn agrees_with_brute_force() {
         let prims = soup(12, 1500);
         let o = Octree::new(&prims, all(&prims));
+        // What it reports is what it holds: the root box holds every
+        // primitive, the memory is the nodes and a 4-byte id per
+        // reference, and the drawing has a box per node, children inside
+        // their parents and one level deeper.
+        let all_boxes = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
+        let root = o.root_bounds();
+        assert!(root.min.cmple(all_boxes.min).all() && root.max.cmpge(all_boxes.max).all());
+        assert_eq!(
+            o.memory_bytes(),
+            o.node_count() * std::mem::size_of::<Node>() + 4 * o.references()
+        );
+        let boxes = o.node_boxes();
+        assert_eq!(boxes.len(), o.node_count());
+        let leaves = o
+            .nodes
+            .iter()
+            .filter(|n| matches!(n, Node::Leaf { .. }))
+            .count();
+        assert_eq!(boxes.iter().filter(|b| b.2).count(), leaves);
+        assert_eq!(boxes.iter().map(|b| b.1).max(), Some(o.depth()));
+        let mut parents = vec![boxes[0]];
+        for &(b, d, leaf) in &boxes[1..] {
+            parents.truncate(d as usize);
+            let (p, pd, _) = *parents.last().expect("a parent");
+            assert_eq!(pd + 1, d);
+            let p = crate::accel::overlap::padded(&p, 1e-4);
+            assert!(p.min.cmple(b.min).all() && b.max.cmple(p.max).all());
+            if !leaf {
+                parents.push((b, d, leaf));
+            }
+        }
         assert_agrees(&o, &prims, 3000);
     }
 
@@ -421,6 +462,16 @@ mod tests {
         let leaves = Octree::new(&prims, all(&prims));
         let inner = Octree::with_storage(&prims, all(&prims), Storage::Inner);
         assert!(inner.inner_references() > 0);
+        let kept: u32 = inner
+            .nodes
+            .iter()
+            .map(|n| match n {
+                Node::Inner { count, .. } => *count,
+                Node::Leaf { .. } => 0,
+            })
+            .sum();
+        assert_eq!(inner.inner_references(), kept as usize);
+        assert_eq!(leaves.inner_references(), 0);
         // Nothing is copied: each primitive is stored exactly once.
         assert_eq!(inner.references(), prims.len());
         assert!(leaves.references() > prims.len());
