@@ -70,3 +70,50 @@ impl Builder {
         self.node(right, start + mid, depth + 1);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::bvh::split::FORCE_MEDIAN_DEPTH;
+    use crate::math::Vec3;
+
+    /// A node's children are one level deeper: built from just above
+    /// `FORCE_MEDIAN_DEPTH`, the root is cut by SAH and both its children
+    /// by the median. Two far-apart copies of 3 + 9 boxes: SAH separates
+    /// the copies, and would cut each copy at its gap (3 | 9), where the
+    /// median cuts it 6 | 6, across the gap.
+    #[test]
+    fn children_are_one_level_deeper() {
+        let mut items = Vec::new();
+        for base in [0.0, 1000.0] {
+            for i in 0..12 {
+                let x = base
+                    + if i < 3 {
+                        0.1 * i as f32
+                    } else {
+                        20.0 + 0.1 * i as f32
+                    };
+                let c = Vec3::new(x, 0.0, 0.0);
+                items.push(Item {
+                    id: items.len() as u32,
+                    bounds: Aabb::new(c - Vec3::splat(0.05), c + Vec3::splat(0.05)),
+                    centroid: c,
+                });
+            }
+        }
+        let mut b = Builder {
+            split: Split::Sah,
+            nodes: Vec::new(),
+        };
+        b.node(&mut items, 0, FORCE_MEDIAN_DEPTH - 1);
+        let root = b.nodes[0];
+        assert!(!root.is_leaf());
+        assert!(b.nodes[1].bounds.max.x < 100.0, "SAH separates the copies");
+        for child in [1, root.offset as usize] {
+            assert!(!b.nodes[child].is_leaf());
+            // The child's first child: six boxes across the gap.
+            let first = b.nodes[child + 1];
+            assert!(first.bounds.extent().x > 19.0, "{first:?}");
+        }
+    }
+}

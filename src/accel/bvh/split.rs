@@ -243,6 +243,88 @@ mod tests {
         }
     }
 
+    /// Binned SAH takes the cheapest of the planes between bins: each
+    /// plane's cost, recomputed here from the items themselves (no sweeps),
+    /// is no lower than the chosen split's.
+    #[test]
+    fn sah_takes_the_cheapest_plane() {
+        let mut r = crate::accel::testutil::Rng::new(40);
+        let mut uneven = 0;
+        for trial in 0..300 {
+            let n = 5 + trial % 40;
+            let mut items: Vec<Item> = (0..n)
+                .map(|i| item(i as u32, r.v(0.0, 10.0), 0.05 + r.f()))
+                .collect();
+            let b = node_bounds(&items);
+            let Some((k, axis)) = choose(&mut items, &b, Split::Sah, 0) else {
+                continue;
+            };
+            let area = |s: &[Item]| node_bounds(s).surface_area();
+            let chosen = k as f32 * area(&items[..k]) + (n - k) as f32 * area(&items[k..]);
+            let cb = Aabb::from_points(items.iter().map(|it| it.centroid));
+            let (lo, width) = (cb.min[axis], cb.extent()[axis] / BINS as f32);
+            let mut best = f32::INFINITY;
+            for plane in 1..BINS {
+                let cut = lo + width * plane as f32;
+                let (l, r): (Vec<Item>, Vec<Item>) =
+                    items.iter().partition(|it| it.centroid[axis] < cut);
+                if !l.is_empty() && !r.is_empty() {
+                    best = best.min(l.len() as f32 * area(&l) + r.len() as f32 * area(&r));
+                }
+            }
+            assert!(chosen <= best * 1.0001, "trial {trial}: {chosen} > {best}");
+            uneven += usize::from(k != n / 2);
+        }
+        // Not the median in disguise.
+        assert!(uneven > 100, "{uneven}");
+    }
+
+    /// Coincident centroids make a leaf, unless there are more than a
+    /// leaf's `u16` count can say: then the node is halved anyway.
+    #[test]
+    fn too_many_coincident_centroids_are_halved() {
+        for (n, want) in [
+            (65_535, None),
+            (65_536, Some((32_768, 0))),
+            (70_001, Some((35_000, 0))),
+        ] {
+            let mut items: Vec<Item> = (0..n).map(|i| item(i, Vec3::ONE, 0.5)).collect();
+            let b = node_bounds(&items);
+            assert_eq!(choose(&mut items, &b, Split::Sah, 0), want, "{n}");
+        }
+    }
+
+    /// The midpoint splits strictly below the middle, and where rounding
+    /// leaves one side empty (centroids a few ulps apart, or so far out
+    /// that their sum overflows) it falls back to the median.
+    #[test]
+    fn midpoint_is_strict_and_falls_back_where_rounding_empties_a_side() {
+        let xs = |v: &[f32]| -> Vec<Item> {
+            v.iter()
+                .enumerate()
+                .map(|(i, &x)| item(i as u32, Vec3::new(x, 0.0, 0.0), 0.01))
+                .collect()
+        };
+        let mut items = xs(&[0.0, 5.0, 5.0, 5.0, 10.0]);
+        let b = node_bounds(&items);
+        assert_eq!(choose(&mut items, &b, Split::Midpoint, 0), Some((1, 0)));
+        // 1 and the next float: their mean rounds to 1, and nothing is below.
+        let next = f32::from_bits(1f32.to_bits() + 1);
+        // 3e38 and 3.3e38: their sum overflows and everything is below it.
+        for v in [
+            [1.0, 1.0, 1.0, next, next, next],
+            [3e38, 3e38, 3e38, 3.3e38, 3.3e38, 3.3e38],
+        ] {
+            let mut items = xs(&v);
+            let b = node_bounds(&items);
+            assert_eq!(
+                choose(&mut items, &b, Split::Midpoint, 0),
+                Some((3, 0)),
+                "{v:?}"
+            );
+        }
+    }
+
     #[test]
     fn deep_nodes_fall_back_to_the_median() {
         let mut items: Vec<Item> = (0..9)
