@@ -714,3 +714,60 @@ fn block<S: Source>(items: &[PrimRef], src: &S) -> Tri4 {
     }
     b
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::testutil::Rng;
+
+    fn refs(n: usize, seed: u64) -> Vec<PrimRef> {
+        let mut r = Rng::new(seed);
+        (0..n)
+            .map(|i| {
+                let (c, h) = (r.v(-10.0, 10.0), r.v(0.0, 0.5));
+                PrimRef {
+                    lo: c - h,
+                    id: i as u32,
+                    hi: c + h,
+                    other: 0,
+                }
+            })
+            .collect()
+    }
+
+    /// Splitting the work over threads changes nothing: the bounds and the
+    /// bins of a range too large for one thread (chunks binned in parallel,
+    /// then merged) are those of one pass over it, and two ranges' bins
+    /// merged are their union's.
+    #[test]
+    fn parallel_bounds_and_bins_equal_one_pass() {
+        let n = PARALLEL_BINNING + 1000;
+        let items = refs(n, 7);
+        let (mut b, mut cb) = (Aabb::EMPTY, Aabb::EMPTY);
+        for p in &items {
+            b = b.union(&Aabb::new(p.lo, p.hi));
+            cb = cb.grow(p.centroid());
+        }
+        assert_eq!(bounds_of(&items), (b, cb));
+        let map = BinMap::new(&cb);
+        let par = large_bins(&items, &cb);
+        let mut one = Bins::<BINS>::new();
+        one.add(&items, &map);
+        assert_eq!(par.count, one.count);
+        assert_eq!((par.lo, par.hi), (one.lo, one.hi));
+        for a in 0..3 {
+            assert_eq!(one.count[a].iter().sum::<u32>() as usize, n);
+            // Every bin is used: the centroids are spread over the range.
+            assert!(one.count[a].iter().all(|&c| c > 0));
+        }
+        let (left, right) = items.split_at(n / 3);
+        let (mut l, mut r) = (Bins::<SMALL_BINS>::new(), Bins::<SMALL_BINS>::new());
+        l.add(left, &map);
+        r.add(right, &map);
+        let merged = l.merge(r);
+        let mut whole = Bins::<SMALL_BINS>::new();
+        whole.add(&items, &map);
+        assert_eq!(merged.count, whole.count);
+        assert_eq!((merged.lo, merged.hi), (whole.lo, whole.hi));
+    }
+}
