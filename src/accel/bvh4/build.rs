@@ -735,6 +735,133 @@ mod tests {
             .collect()
     }
 
+    /// A range over all of `items`.
+    fn range(items: &[PrimRef]) -> Range {
+        let (bounds, cbounds) = bounds_of(items);
+        Range {
+            begin: 0,
+            end: items.len(),
+            bounds,
+            cbounds,
+        }
+    }
+
+    /// Boxes of half-size `h` around `centres`.
+    fn boxes(centres: impl IntoIterator<Item = Vec3>, h: Vec3) -> Vec<PrimRef> {
+        centres
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| PrimRef {
+                lo: c - h,
+                id: i as u32,
+                hi: c + h,
+                other: 0,
+            })
+            .collect()
+    }
+
+    /// The plan's bin plane is the cheapest of all planes on all axes:
+    /// each plane's cost, recomputed here from the items themselves (the
+    /// boxes of each side and their blocks of four), is no lower, and no
+    /// plane leaves a side empty. Ranges below `SMALL_RANGE` use its bins,
+    /// larger ones `BINS`; one axis is flat in a quarter of the trials.
+    #[test]
+    fn the_plan_takes_the_cheapest_bin_plane() {
+        let b = Builder { pad: Vec3::ZERO };
+        let mut r = Rng::new(41);
+        let mut splits = 0;
+        for trial in 0..240 {
+            let n = 9 + trial % 100;
+            let mut spread = r.v(0.5, 10.0);
+            if trial % 4 == 0 {
+                spread[trial % 3] = 0.0;
+            }
+            let centres: Vec<Vec3> = (0..n).map(|_| r.v(0.0, 1.0) * spread).collect();
+            let items = boxes(centres, Vec3::splat(0.2));
+            let rg = range(&items);
+            let Some(Plan::Bin { axis, pos, bins }) = b.plan(&items, &rg, 0) else {
+                continue;
+            };
+            assert_eq!(bins, if n < SMALL_RANGE { SMALL_BINS } else { BINS });
+            let map = BinMap::new(&rg.cbounds);
+            let bin = |p: &PrimRef, a: usize| {
+                let k = (p.centroid()[a] - map.min[a]) * map.scale[a] * bins as f32;
+                k.max(0.0).min((bins - 1) as f32) as usize
+            };
+            let cost = |a: usize, k: usize| -> Option<f32> {
+                let (l, rt): (Vec<PrimRef>, Vec<PrimRef>) =
+                    items.iter().partition(|p| bin(p, a) < k);
+                let side = |s: &[PrimRef]| bounds_of(s).0.surface_area() * blocks(s.len());
+                (!l.is_empty() && !rt.is_empty()).then(|| side(&l) + side(&rt))
+            };
+            let chosen = cost(axis, pos).expect("the plane leaves no side empty");
+            let best = (0..3)
+                .filter(|&a| rg.cbounds.extent()[a] > 0.0)
+                .flat_map(|a| (1..bins).filter_map(move |k| cost(a, k)))
+                .fold(f32::INFINITY, f32::min);
+            assert!(chosen <= best * 1.0001, "trial {trial}: {chosen} > {best}");
+            splits += 1;
+        }
+        assert!(splits > 200, "{splits}");
+    }
+
+    /// When a range stays a leaf, and when the median takes over: four or
+    /// fewer items, and coincident centroids up to a leaf's capacity, make a
+    /// leaf (more are halved); a pile of overlapping boxes that no plane
+    /// separates profitably stays a leaf, two clusters are split; and a
+    /// range too deep for the SAH to finish under `MAX_DEPTH` is cut by
+    /// the median along its centroids' longest axis (100 items: 7 bits,
+    /// 7/2 + 2 = 5 levels left).
+    #[test]
+    fn the_plan_stops_at_leaves_and_falls_back_to_the_median() {
+        let b = Builder { pad: Vec3::ZERO };
+        let plan = |items: &[PrimRef], depth| b.plan(items, &range(items), depth);
+        let pile = |n: usize| boxes(vec![Vec3::ONE; n], Vec3::splat(0.5));
+        assert!(plan(
+            &boxes([Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z], Vec3::splat(0.1)),
+            0
+        )
+        .is_none());
+        for n in [5, MAX_LEAF_ITEMS] {
+            assert!(plan(&pile(n), 0).is_none(), "{n}");
+        }
+        for n in [MAX_LEAF_ITEMS + 1, 100] {
+            assert!(
+                matches!(plan(&pile(n), 0), Some(Plan::Median { .. })),
+                "{n}"
+            );
+        }
+        let overlapping = boxes(
+            (0..8).map(|i| Vec3::X * (0.025 * i as f32)),
+            Vec3::splat(0.5),
+        );
+        assert!(plan(&overlapping, 0).is_none());
+        let clusters = boxes(
+            (0..8).map(|i| Vec3::X * (100.0 * (i / 4) as f32)),
+            Vec3::splat(0.5),
+        );
+        assert!(matches!(
+            plan(&clusters, 0),
+            Some(Plan::Bin {
+                axis: 0,
+                pos: 1..=7,
+                ..
+            })
+        ));
+        let mut r = Rng::new(42);
+        for axis in 0..3 {
+            let mut spread = Vec3::ONE;
+            spread[axis] = 10.0;
+            let items = boxes((0..100).map(|_| r.v(0.0, 1.0) * spread), Vec3::splat(0.1));
+            let deep = MAX_DEPTH - 5;
+            assert!(
+                matches!(plan(&items, deep), Some(Plan::Median { axis: a }) if a == axis),
+                "axis {axis}"
+            );
+            assert!(matches!(plan(&items, deep - 1), Some(Plan::Bin { .. })));
+        }
+    }
+
     /// Splitting the work over threads changes nothing: the bounds and the
     /// bins of a range too large for one thread (chunks binned in parallel,
     /// then merged) are those of one pass over it, and two ranges' bins
