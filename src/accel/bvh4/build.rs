@@ -862,6 +862,72 @@ mod tests {
         }
     }
 
+    /// `divide` puts on the left exactly the items whose bin (as the sweep
+    /// binned them) is below the plan's plane, keeps every item, and
+    /// returns each side's bounds; the median halves a range.
+    #[test]
+    fn divide_follows_the_bins_and_the_median_halves() {
+        let b = Builder { pad: Vec3::ZERO };
+        let mut r = Rng::new(43);
+        let mut cuts = 0;
+        for trial in 0..60 {
+            let n = 9 + 2 * trial;
+            let mut items = boxes((0..n).map(|_| r.v(0.0, 4.0)), Vec3::splat(0.1));
+            let rg = range(&items);
+            let Some(plan @ Plan::Bin { axis, pos, bins }) = b.plan(&items, &rg, 0) else {
+                continue;
+            };
+            let map = BinMap::new(&rg.cbounds);
+            let bin = |p: &PrimRef| {
+                let c = Vec3A::from(p.centroid());
+                if bins == SMALL_BINS {
+                    map.bins::<SMALL_BINS>(c)[axis]
+                } else {
+                    map.bins::<BINS>(c)[axis]
+                }
+            };
+            let mut before: Vec<u32> = items.iter().map(|p| p.id).collect();
+            let (left, right) = b.divide(&mut items, &rg, plan);
+            assert_eq!((left.begin, left.end, right.end), (0, right.begin, n));
+            assert!(items[..left.end].iter().all(|p| bin(p) < pos));
+            assert!(items[right.begin..].iter().all(|p| bin(p) >= pos));
+            assert_eq!(bounds_of(&items[..left.end]), (left.bounds, left.cbounds));
+            assert_eq!(
+                bounds_of(&items[right.begin..]),
+                (right.bounds, right.cbounds)
+            );
+            let mut after: Vec<u32> = items.iter().map(|p| p.id).collect();
+            before.sort_unstable();
+            after.sort_unstable();
+            assert_eq!(before, after);
+            cuts += 1;
+        }
+        assert!(cuts > 50, "{cuts}");
+        // A centroid exactly on plane 4 of 8 (k = 4.0) is in bin 4: right.
+        let scale = BinMap::new(&Aabb::new(Vec3::ZERO, Vec3::X * 4.0)).scale.x * 8.0;
+        let mut c = f32::from_bits((4.0 / scale).to_bits() - 8);
+        while c * scale != 4.0 {
+            assert!(c * scale < 4.0, "no float lands on the plane");
+            c = f32::from_bits(c.to_bits() + 1);
+        }
+        let xs = [0.0, 0.0, c, 4.0, 4.0];
+        let mut items = boxes(xs.map(|x| Vec3::X * x), Vec3::ZERO);
+        let rg = range(&items);
+        let plan = Plan::Bin {
+            axis: 0,
+            pos: 4,
+            bins: 8,
+        };
+        let (left, _) = b.divide(&mut items, &rg, plan);
+        assert_eq!(left.end, 2);
+        for n in [9, 100] {
+            let mut pile = boxes(vec![Vec3::ONE; n], Vec3::splat(0.5));
+            let rg = range(&pile);
+            let (left, right) = b.divide(&mut pile, &rg, Plan::Median { axis: 0 });
+            assert_eq!((left.end, right.begin, right.end), (n / 2, n / 2, n));
+        }
+    }
+
     /// Splitting the work over threads changes nothing: the bounds and the
     /// bins of a range too large for one thread (chunks binned in parallel,
     /// then merged) are those of one pass over it, and two ranges' bins
