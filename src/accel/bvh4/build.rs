@@ -928,6 +928,46 @@ mod tests {
         }
     }
 
+    /// Every node is planned for its own level. A geometric chain (which
+    /// SAH peels a few items at a time) started at each level a range of
+    /// its size can reach (from level 15 on, 300 items are already
+    /// median-split above) ends within `MAX_DEPTH`, at the depths measured
+    /// when this test was written (session 10). Planning a node's children at its
+    /// own level instead moves the switch a level down (the chain then ends
+    /// at 17 or 18: within `MAX_DEPTH` here, but not in general). Like
+    /// `build_quality_stays_where_it_was_measured`, a deliberate change to
+    /// the builder updates the table.
+    #[test]
+    fn a_chain_started_at_any_level_ends_where_it_was_measured() {
+        let b = Builder { pad: Vec3::ZERO };
+        // The chain runs on in a node's first child, and mirrored in its
+        // second.
+        let measured = [
+            (
+                1.0,
+                [8, 9, 10, 11, 12, 13, 14, 15, 16, 16, 16, 16, 16, 18, 19],
+            ),
+            (
+                -1.0,
+                [16, 16, 16, 16, 17, 17, 17, 17, 18, 18, 18, 18, 18, 18, 19],
+            ),
+        ];
+        for (dir, measured) in measured {
+            let chain = boxes((0..300).map(|k| Vec3::X * dir * 1.2f32.powi(k)), Vec3::ZERO);
+            let mut ends = Vec::new();
+            for start in 0..=14 {
+                let mut items = chain.clone();
+                let rg = range(&items);
+                let plan = b.plan(&items, &rg, start);
+                let mut out = Vec::new();
+                b.subtree(&mut items, rg, plan, start, &mut out);
+                ends.push(start + depth(&out));
+            }
+            assert!(ends.iter().all(|&e| e <= MAX_DEPTH), "{ends:?}");
+            assert_eq!(ends, measured, "direction {dir}");
+        }
+    }
+
     /// Splitting the work over threads changes nothing: the bounds and the
     /// bins of a range too large for one thread (chunks binned in parallel,
     /// then merged) are those of one pass over it, and two ranges' bins

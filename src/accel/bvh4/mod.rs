@@ -478,6 +478,8 @@ mod tests {
         let b = Bvh4::new(&prims, all(&prims));
         let d = build::depth(&b.nodes);
         assert!(d > traverse::SHALLOW_DEPTH, "depth {d}");
+        // Planned for its level, every node sits within the deepest level.
+        assert!(d <= build::MAX_DEPTH, "depth {d}");
         assert!(b.deep);
         let ray = Ray::new(Vec3::new(0.5, 0.0, 0.0), Vec3::X);
         let mut c = Counters::default();
