@@ -968,6 +968,36 @@ mod tests {
         }
     }
 
+    /// The parallel path (children of 16k items or more built on other
+    /// threads) plans for the same levels as the serial one: started at
+    /// level 12, where the median takes over within a few levels, it
+    /// builds the one-thread build's nodes, in the same order.
+    #[test]
+    fn the_parallel_path_plans_for_the_same_levels() {
+        let b = Builder { pad: Vec3::ZERO };
+        let mut r = Rng::new(44);
+        let centres: Vec<Vec3> = (0..PARALLEL_ITEMS + 4000)
+            .map(|_| r.v(0.0, 100.0))
+            .collect();
+        let items = boxes(centres, Vec3::splat(0.3));
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            pool.install(|| {
+                let mut items = items.clone();
+                let rg = range(&items);
+                let plan = b.plan(&items, &rg, 12);
+                let mut out = Vec::new();
+                b.subtree(&mut items, rg, plan, 12, &mut out);
+                let ids: Vec<u32> = items.iter().map(|p| p.id).collect();
+                (format!("{out:?}"), ids)
+            })
+        };
+        assert!(run(1) == run(4), "the parallel path built another tree");
+    }
+
     /// Splitting the work over threads changes nothing: the bounds and the
     /// bins of a range too large for one thread (chunks binned in parallel,
     /// then merged) are those of one pass over it, and two ranges' bins

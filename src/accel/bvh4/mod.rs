@@ -400,6 +400,29 @@ mod tests {
         }
     }
 
+    /// The parallel build (a range of 16k items or more has its children
+    /// built on other threads, their nodes appended and renumbered) makes
+    /// the one-thread build's tree, node for node and block for block.
+    #[test]
+    fn the_parallel_build_equals_the_serial_one() {
+        let prims = soup(8, 40_000);
+        let build = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool")
+                .install(|| Bvh4::new(&prims, all(&prims)))
+        };
+        let (one, four) = (build(1), build(4));
+        assert_eq!(one.nodes.len(), four.nodes.len());
+        assert!(one.nodes.len() > 1000);
+        for (a, b) in one.nodes.iter().zip(&four.nodes) {
+            assert_eq!(a.child, b.child);
+            assert_eq!(format!("{:?}", a.planes), format!("{:?}", b.planes));
+        }
+        assert_eq!(format!("{:?}", one.tris), format!("{:?}", four.tris));
+    }
+
     #[test]
     fn empty_hits_nothing() {
         let b = Bvh4::new(&[], vec![]);
