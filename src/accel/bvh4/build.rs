@@ -998,6 +998,25 @@ mod tests {
         assert!(run(1) == run(4), "the parallel path built another tree");
     }
 
+    /// The in-place partition puts the items the predicate holds for first,
+    /// returns their count and both sides' bounds, also when one side is
+    /// empty (every item on one side).
+    #[test]
+    fn partition_separates_and_bounds_both_sides() {
+        let mut r = Rng::new(45);
+        for n in [1, 2, 3, 10, 101] {
+            let items = boxes((0..n).map(|_| r.v(0.0, 1.0)), Vec3::splat(0.01));
+            for cut in [-1.0, 0.3, 0.5, 2.0] {
+                let mut v = items.clone();
+                let (k, lb, rb) = partition(&mut v, |p| p.centroid().x < cut);
+                assert_eq!(k, items.iter().filter(|p| p.centroid().x < cut).count());
+                assert!(v[..k].iter().all(|p| p.centroid().x < cut));
+                assert!(v[k..].iter().all(|p| p.centroid().x >= cut));
+                assert_eq!((lb, rb), (bounds_of(&v[..k]), bounds_of(&v[k..])));
+            }
+        }
+    }
+
     /// Splitting the work over threads changes nothing: the bounds and the
     /// bins of a range too large for one thread (chunks binned in parallel,
     /// then merged) are those of one pass over it, and two ranges' bins
