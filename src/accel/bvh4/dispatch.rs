@@ -209,3 +209,41 @@ mod avx2 {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::bvh4::node::NO_ITEM;
+    use crate::accel::testutil::{ray, soup, Rng};
+    use crate::accel::Bvh4;
+    use crate::stats::Counters;
+
+    /// The portable copy (the only one on a CPU without AVX2, so never the
+    /// dispatched one here) gives the dispatched copy's answers and
+    /// statistics, bit for bit, with either stack.
+    #[test]
+    fn the_portable_copy_answers_as_the_dispatched_one() {
+        let prims = soup(9, 2000);
+        let b = Bvh4::new(&prims, (0..prims.len() as u32).collect());
+        let (nodes, tris, fb) = (&b.nodes, &b.tris, prims.as_slice());
+        let mut r = Rng::new(10);
+        let (mut hits, mut blocked) = (0, 0);
+        for _ in 0..1000 {
+            let q = ray(&mut r);
+            for deep in [false, true] {
+                let (mut c1, mut c2) = (Counters::default(), Counters::default());
+                let inf = f32::INFINITY;
+                let want = closest(nodes, tris, fb, &q, 0.0, inf, &mut c1, deep);
+                let got = portable::closest(nodes, tris, fb, &q, 0.0, inf, &mut c2, deep);
+                assert_eq!(got, want);
+                let want = any(nodes, tris, fb, &q, (0.0, 0.2), NO_ITEM, &mut c1, deep);
+                let got = portable::any(nodes, tris, fb, &q, (0.0, 0.2), NO_ITEM, &mut c2, deep);
+                assert_eq!(got, want);
+                assert_eq!(format!("{c1:?}"), format!("{c2:?}"));
+                hits += usize::from(want);
+                blocked += usize::from(got);
+            }
+        }
+        assert!((100..1900).contains(&hits) && blocked == hits, "{hits}");
+    }
+}

@@ -423,6 +423,49 @@ mod tests {
         assert_eq!(format!("{:?}", one.tris), format!("{:?}", four.tris));
     }
 
+    /// Every item sits in exactly one lane of one block, and each leaf's
+    /// blocks hold exactly its items (leaves of up to eight items take two
+    /// blocks; the second holds what the first could not).
+    #[test]
+    fn every_item_is_in_one_block_of_its_leaf() {
+        use crate::accel::testutil::{prim, Rng};
+        use crate::shape::{Shape, Triangle};
+        use node::{is_leaf, leaf_range, EMPTY, NO_ITEM, OTHER};
+        // 50 piles of 6 copies of a triangle: no plane separates a pile, so
+        // each is a leaf of six items (two blocks); and a soup.
+        let mut r = Rng::new(13);
+        let mut prims = soup(12, 1000);
+        for _ in 0..50 {
+            let a = r.v(-20.0, 20.0);
+            let t = Triangle::new(a, a + Vec3::X, a + Vec3::Y);
+            prims.extend((0..6).map(|_| prim(Shape::Triangle(t))));
+        }
+        let b = Bvh4::new(&prims, all(&prims));
+        let mut seen = vec![0u32; prims.len()];
+        let mut leaves = 0;
+        for n in &b.nodes {
+            for &c in &n.child {
+                if c == EMPTY || !is_leaf(c) {
+                    continue;
+                }
+                let (first, blocks) = leaf_range(c);
+                for t in &b.tris[first..first + blocks] {
+                    let used = t.ids.iter().filter(|&&id| id != NO_ITEM).count();
+                    assert!(used > 0);
+                    for &id in t.ids.iter().filter(|&&id| id != NO_ITEM) {
+                        seen[(id & !OTHER) as usize] += 1;
+                    }
+                }
+                leaves += 1;
+            }
+        }
+        assert!(leaves > 100);
+        assert!(
+            seen.iter().all(|&k| k == 1),
+            "an item in no block or in two"
+        );
+    }
+
     #[test]
     fn empty_hits_nothing() {
         let b = Bvh4::new(&[], vec![]);
