@@ -44,8 +44,8 @@ const SPLIT_COST: f32 = 0.5;
 const PARALLEL_ITEMS: usize = 16 * 1024;
 /// Binning is split over threads above this many items.
 const PARALLEL_BINNING: usize = 64 * 1024;
-/// Deepest node level: the traversal stack holds at most `(W − 1) · depth
-/// + 1` pending children.
+/// Deepest node level: the traversal stack holds at most `(W − 1) · depth`
+/// pending children.
 pub(crate) const MAX_DEPTH: usize = 20;
 
 /// One item during the build: its bounds and id (32 bytes).

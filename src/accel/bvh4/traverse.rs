@@ -8,10 +8,10 @@ use crate::shape::{intersect_triangle, may_hit4, WatertightRay, WatertightRay4};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
-/// Entries of the traversal stack for any tree: the builder bounds the
-/// depth (`build::MAX_DEPTH`) and at most `(W − 1) · depth + 1` entries are
-/// ever pending.
-pub(crate) const DEEP: usize = (W - 1) * super::build::MAX_DEPTH + 1;
+/// Entries of the traversal stack for any tree: at most `W − 1` pending per
+/// inner level and `build::MAX_DEPTH` levels (exact: see the test
+/// `a_worst_case_tree_fills_the_deep_stack`).
+pub(crate) const DEEP: usize = (W - 1) * super::build::MAX_DEPTH;
 /// Entries of the stack for trees at most [`SHALLOW_DEPTH`] deep, the usual
 /// case (the deep stack's zeroing, 1 KB per ray, was 6% of a render's
 /// time).
@@ -512,12 +512,134 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
     hit
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
+#[cfg(test)]
 mod tests {
+    use super::super::build::{self, MAX_DEPTH};
     use super::*;
+    use crate::accel::bvh4::node::leaf;
+    use crate::stats::NoStats;
+
+    /// The worst case for the stack: a chain of `MAX_DEPTH` inner nodes,
+    /// each with seven leaves beside the next node, and a ray through every
+    /// box, the next node's nearest (and in slot 0, which `any` follows
+    /// first). Every leaf is an empty block but the last, one triangle at
+    /// x = 4.
+    fn caterpillar() -> (Vec<Node>, Vec<Tri4>) {
+        let mut tri = Tri4::EMPTY;
+        let v = [[4.0, -1.0, -1.0], [4.0, 2.0, -1.0], [4.0, -1.0, 2.0]];
+        for (k, vk) in v.iter().enumerate() {
+            for (a, &c) in vk.iter().enumerate() {
+                tri.v[k][a].x = c;
+            }
+        }
+        tri.ids[0] = 7;
+        let tris = vec![Tri4::EMPTY, tri];
+        let nodes = (0..MAX_DEPTH)
+            .map(|i| {
+                let mut n = Node::EMPTY;
+                let next = if i + 1 < MAX_DEPTH {
+                    i as u32 + 1
+                } else {
+                    leaf(1, 1)
+                };
+                n.set(0, next, Vec3::splat(-5.0), Vec3::splat(5.0));
+                for s in 1..W {
+                    n.set(s, leaf(0, 1), Vec3::new(0.0, -5.0, -5.0), Vec3::splat(5.0));
+                }
+                n
+            })
+            .collect();
+        (nodes, tris)
+    }
+
+    /// [`DEEP`] entries serve the deepest tree the builder makes, with a
+    /// ray that leaves `W − 1` children pending at every level, and one
+    /// entry fewer does not: the bound is exact.
+    #[test]
+    fn a_worst_case_tree_fills_the_deep_stack() {
+        let (nodes, tris) = caterpillar();
+        assert_eq!(build::depth(&nodes), MAX_DEPTH);
+        let rd = RayData::new(&Ray::new(Vec3::new(-10.0, 0.0, 0.0), Vec3::X));
+        let run = |f: &dyn Fn() -> (Option<Closest>, bool)| {
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+        };
+        let (hit, blocked) = run(&|| {
+            (
+                closest::<_, _, _, DEEP>(
+                    Portable,
+                    &nodes,
+                    &tris,
+                    &TrianglesOnly,
+                    &rd,
+                    0.0,
+                    f32::INFINITY,
+                    &mut NoStats,
+                ),
+                any::<_, _, _, DEEP>(
+                    Portable,
+                    &nodes,
+                    &tris,
+                    &TrianglesOnly,
+                    &rd,
+                    0.0,
+                    f32::INFINITY,
+                    NO_ITEM,
+                    &mut NoStats,
+                ),
+            )
+        })
+        .expect("DEEP entries suffice");
+        let hit = hit.expect("the triangle at x = 4");
+        assert_eq!((hit.t, hit.id), (14.0, 7));
+        assert!(blocked);
+        // A ray that stops short of the triangle: `any` then walks the whole
+        // chain too, every leaf pending.
+        assert!(!any::<_, _, _, DEEP>(
+            Portable,
+            &nodes,
+            &tris,
+            &TrianglesOnly,
+            &rd,
+            0.0,
+            13.0,
+            NO_ITEM,
+            &mut NoStats
+        ));
+        const SHORT: usize = DEEP - 1;
+        assert!(run(&|| (
+            closest::<_, _, _, SHORT>(
+                Portable,
+                &nodes,
+                &tris,
+                &TrianglesOnly,
+                &rd,
+                0.0,
+                f32::INFINITY,
+                &mut NoStats
+            ),
+            false
+        ))
+        .is_err());
+        assert!(run(&|| (
+            None,
+            any::<_, _, _, SHORT>(
+                Portable,
+                &nodes,
+                &tris,
+                &TrianglesOnly,
+                &rd,
+                0.0,
+                13.0,
+                NO_ITEM,
+                &mut NoStats
+            )
+        ))
+        .is_err());
+    }
 
     /// The AVX box test gives the portable test's masks and distances bit
     /// for bit, NaN slabs (origin on a plane, direction parallel) included.
+    #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_boxes_match_portable() {
         if !std::arch::is_x86_feature_detected!("avx2") {
