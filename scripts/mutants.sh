@@ -84,6 +84,8 @@ if [ "$(ps -o sid= -p $$ | tr -d ' ')" = "$$" ] && [ -w /proc/self/autogroup ]; 
 fi
 
 export NEXTEST_PROFILE=mutants
+# Stage 1's tests are short: its profile kills a hung one sooner.
+[ "${MUTANTS_STAGE:-}" = unit ] && NEXTEST_PROFILE=mutants-unit
 if command -v mold >/dev/null; then
   export RUSTFLAGS="${RUSTFLAGS:-} -C link-arg=-fuse-ld=mold"
 fi
