@@ -293,6 +293,43 @@ mod tests {
         }
     }
 
+    /// A sphere that is primitive 0 (its leaf id is the bare `OTHER` flag,
+    /// the one id whose index bits are all zero) shares a leaf block with
+    /// triangles and is still found, by the closest-hit walk and by the
+    /// any-hit walk: a flag test that confused "flagged" with "non-zero"
+    /// would pass it by. Then a soup with its spheres first, against brute
+    /// force.
+    #[test]
+    fn a_sphere_that_is_primitive_0_blocks_and_is_hit() {
+        use crate::accel::testutil::prim;
+        use crate::shape::{Shape, Triangle};
+        let tri = |x: f32| {
+            let v = Vec3::new(x, -1.0, -1.0);
+            prim(Shape::Triangle(Triangle::new(
+                v,
+                v + Vec3::new(0.0, 2.0, 0.0),
+                v + Vec3::new(0.0, 0.0, 2.0),
+            )))
+        };
+        let prims = vec![sphere(Vec3::ZERO, 0.5), tri(3.0), tri(4.0)];
+        let b = Bvh4::new(&prims, all(&prims));
+        // One leaf, one block: the sphere's lane beside the triangles'.
+        assert_eq!(b.tris.len(), 1);
+        let mut c = Counters::default();
+        let ray = Ray::new(Vec3::new(-5.0, 0.1, 0.2), Vec3::X);
+        let hit = b.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+        assert_eq!(hit.map(|h| h.prim), Some(0));
+        // The sphere is met at t of about 4.5, the triangles at 8 and 9:
+        // up to 6 only the sphere can block.
+        assert!(b.occluded(&prims, &ray, 0.0, 6.0, &mut c));
+        assert!(!b.occluded(&prims, &ray, 0.0, 4.4, &mut c));
+
+        let mut soup = soup(8, 400);
+        soup.rotate_right(100);
+        let b = Bvh4::new(&soup, all(&soup));
+        assert_agrees(&b, &soup, 3000);
+    }
+
     /// Degenerate triangles (one point, collinear points, a NaN or an
     /// infinite vertex) are left out of the build: a non-finite one would
     /// poison the bounds the whole tree is binned in. The rest of the soup
