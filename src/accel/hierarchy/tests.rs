@@ -219,3 +219,75 @@ fn reports_its_shape_and_visits_to_the_same_hit() {
     }
     assert!(hits > 30 && leaves > 30, "{hits} hits, {leaves} leaves");
 }
+
+/// Every node's box holds exactly what lies below it: a leaf's the union of
+/// its primitives' (padded) boxes, an inner node's the union of its
+/// children's. An empty or missing box would not change a single hit (an
+/// empty box's slabs cover every ray), only the culling, which agreement
+/// with brute force cannot see.
+#[test]
+fn every_box_is_the_union_of_what_lies_below() {
+    let prims = soup(34, 600);
+    for chunk in [1, 7, 100] {
+        let h = HierarchyBvh::new(&prims, all(&prims), &chunked(prims.len() as u32, chunk));
+        let mut inner = 0;
+        for node in &h.nodes {
+            let below = match node.kind {
+                Kind::Inner { first, count, .. } => {
+                    inner += 1;
+                    (first..first + count)
+                        .fold(Aabb::EMPTY, |b, c| b.union(&h.nodes[c as usize].bounds))
+                }
+                Kind::Leaf { start, count, .. } => {
+                    let ids = &h.ids[start as usize..(start + count) as usize];
+                    let b = ids
+                        .iter()
+                        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+                    assert_eq!(node.bounds.union(&b), node.bounds);
+                    continue;
+                }
+            };
+            assert!(!node.bounds.is_empty());
+            assert_eq!(node.bounds, below);
+        }
+        assert!(inner > 1);
+        // A ray past the whole scene tests the root's box and nothing else.
+        let mut c = Counters::default();
+        let miss = Ray::new(Vec3::new(0.0, 100.0, 0.0), Vec3::X);
+        assert!(h
+            .intersect(&prims, &miss, 0.0, f32::INFINITY, &mut c)
+            .is_none());
+        assert_eq!(c.nodes_visited, 1);
+    }
+}
+
+/// Halving cuts across the longest spread of the centres: a row of small
+/// spheres along any one axis is cut into halves that do not overlap along
+/// it, at every inner node (a cut along another axis would interleave them).
+#[test]
+fn halving_cuts_along_the_longest_spread() {
+    for axis in 0..3 {
+        let prims: Vec<Primitive> = (0..64)
+            .map(|i| {
+                let mut c = Vec3::new(0.01 * (i as f32).sin(), 0.02 * (i as f32).cos(), 0.0);
+                c[axis] = i as f32;
+                crate::accel::testutil::sphere(c, 0.1)
+            })
+            .collect();
+        let h = HierarchyBvh::new(&prims, all(&prims), &SceneTree::Shape(0..64));
+        let mut inner = 0;
+        for node in &h.nodes {
+            if let Kind::Inner { first, count, .. } = node.kind {
+                inner += 1;
+                let mut kids: Vec<Aabb> = (first..first + count)
+                    .map(|c| h.nodes[c as usize].bounds)
+                    .collect();
+                kids.sort_by(|a, b| a.min[axis].total_cmp(&b.min[axis]));
+                for w in kids.windows(2) {
+                    assert!(w[0].max[axis] < w[1].min[axis], "axis {axis}: {kids:?}");
+                }
+            }
+        }
+        assert!(inner >= 7, "{inner}");
+    }
+}
