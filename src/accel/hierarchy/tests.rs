@@ -291,3 +291,30 @@ fn halving_cuts_along_the_longest_spread() {
         assert!(inner >= 7, "{inner}");
     }
 }
+
+/// A node whose box the ray enters beyond the best hit so far is dropped
+/// when popped, unopened: a group behind the hit costs the ray what the same
+/// group beside the ray costs (its box tested, nothing below it).
+#[test]
+fn a_group_behind_the_hit_is_not_opened() {
+    let cluster = |x: f32, y: f32| -> Vec<Primitive> {
+        (0..8)
+            .map(|i| crate::accel::testutil::sphere(Vec3::new(x, y, i as f32 * 0.3), 0.5))
+            .collect()
+    };
+    let tree = SceneTree::Group(vec![
+        SceneTree::Group((0..8).map(|i| SceneTree::Shape(i..i + 1)).collect()),
+        SceneTree::Group((8..16).map(|i| SceneTree::Shape(i..i + 1)).collect()),
+    ]);
+    let visits = |far_y: f32| {
+        let mut prims = cluster(0.0, 0.0);
+        prims.extend(cluster(10.0, far_y));
+        let h = HierarchyBvh::new(&prims, all(&prims), &tree);
+        let mut c = Counters::default();
+        let ray = Ray::new(Vec3::new(-5.0, 0.0, 0.1), Vec3::X);
+        let hit = h.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+        assert!(hit.is_some_and(|h| h.prim < 8 && h.t < 5.0));
+        c.nodes_visited
+    };
+    assert_eq!(visits(0.0), visits(50.0));
+}
