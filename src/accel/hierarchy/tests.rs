@@ -318,3 +318,28 @@ fn a_group_behind_the_hit_is_not_opened() {
     };
     assert_eq!(visits(0.0), visits(50.0));
 }
+
+/// The counters, on a tree small enough to count by hand: a root over two
+/// leaves of three spheres, and a ray through all three boxes that misses
+/// every sphere. Both queries test the root's box and its two children's (3
+/// boxes) and all six spheres.
+#[test]
+fn counters_count_every_box_and_every_test() {
+    let prims: Vec<Primitive> = [0.0, 2.0, 4.0, 10.0, 12.0, 14.0]
+        .iter()
+        .map(|&x| crate::accel::testutil::sphere(Vec3::new(x, 0.0, 0.0), 0.5))
+        .collect();
+    let tree = SceneTree::Group(vec![SceneTree::Shape(0..3), SceneTree::Shape(3..6)]);
+    let h = HierarchyBvh::new(&prims, all(&prims), &tree);
+    assert_eq!(h.nodes.len(), 3);
+    // 0.45 off the axis in y and z: inside every box, outside every sphere.
+    let ray = Ray::new(Vec3::new(-5.0, 0.45, 0.45), Vec3::X);
+    let mut c = Counters::default();
+    assert!(h
+        .intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c)
+        .is_none());
+    assert_eq!((c.nodes_visited, c.intersection_tests), (3, 6));
+    let mut c = Counters::default();
+    assert!(!h.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c));
+    assert_eq!((c.nodes_visited, c.intersection_tests), (3, 6));
+}
