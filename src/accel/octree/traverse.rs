@@ -42,9 +42,11 @@ struct Entry {
     t1: f32,
 }
 
-/// Popping a node at depth `d` pushes at most 4 children, 3 of which stay on
-/// the stack while the first is explored: `3·MAX_DEPTH + 1` entries suffice.
-const STACK: usize = 3 * MAX_DEPTH as usize + 2;
+/// Popping a node pushes at most 4 children (a ray crosses at most three
+/// split planes in it), 3 of which stay on the stack while the first is
+/// explored: `3·MAX_DEPTH + 1` entries, exactly what the worst case uses
+/// (`tests::a_corner_ray_fills_the_stack`).
+const STACK: usize = 3 * MAX_DEPTH as usize + 1;
 
 /// The leaves a ray crosses within `[tmin, tmax]`, front to back.
 pub struct LeafWalk<'a> {
@@ -194,5 +196,69 @@ impl<'a> Iterator for LeafWalk<'a> {
             }
         }
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Storage;
+    use super::*;
+    use crate::math::{Ray, Vec3};
+
+    /// The worst case for the stack, built by hand: a chain of `MAX_DEPTH`
+    /// inner nodes, each halved along all three axes, the next one in the
+    /// corner slot at the origin, the other seven empty leaves; and a ray
+    /// from that corner that crosses all three of every cell's middle
+    /// planes (x at `s/2`, y at `s/2.2`, z at `s/2.4`, all before the cell's
+    /// exit at `s/1.2`), so every inner node leaves three children pending.
+    #[test]
+    fn a_corner_ray_fills_the_stack() {
+        let depth = MAX_DEPTH as usize;
+        let mut nodes = vec![Node::Inner {
+            first: 1,
+            axes: 7,
+            start: 0,
+            count: 0,
+        }];
+        for level in 0..depth {
+            let first = nodes.len();
+            for slot in 0..8 {
+                nodes.push(if slot == 0 && level + 1 < depth {
+                    Node::Inner {
+                        first: (first + 8) as u32,
+                        axes: 7,
+                        start: 0,
+                        count: 0,
+                    }
+                } else {
+                    Node::Leaf { start: 0, count: 0 }
+                });
+            }
+        }
+        let cube = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let tree = Octree {
+            nodes,
+            items: Vec::new(),
+            root: cube,
+            bounds: cube,
+            depth: MAX_DEPTH,
+            storage: Storage::Leaves,
+            inner_refs: 0,
+        };
+        let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 1.1, 1.2));
+        let mut w = LeafWalk::new(&tree, &ray, 0.0, f32::INFINITY);
+        // After each leaf comes back, the stack holds what was pending
+        // beside it: one entry fewer than when the leaf was popped.
+        let (mut peak, mut leaves) = (w.len, 0);
+        while w.next().is_some() {
+            peak = peak.max(w.len + 1);
+            leaves += 1;
+        }
+        // Four children crossed in each cell of the chain: three leaves and
+        // the next node, four leaves at the end.
+        assert_eq!(w.visited as usize, 1 + 4 * depth);
+        assert_eq!(leaves, 3 * depth + 1);
+        assert_eq!(peak, 3 * depth + 1);
+        assert_eq!(peak, STACK);
     }
 }
