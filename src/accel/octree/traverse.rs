@@ -249,11 +249,17 @@ mod tests {
         let mut w = LeafWalk::new(&tree, &ray, 0.0, f32::INFINITY);
         // After each leaf comes back, the stack holds what was pending
         // beside it: one entry fewer than when the leaf was popped.
-        let (mut peak, mut leaves) = (w.len, 0);
-        while w.next().is_some() {
+        let (mut peak, mut leaves, mut depths) = (w.len, 0, Vec::new());
+        while let Some(leaf) = w.next() {
             peak = peak.max(w.len + 1);
             leaves += 1;
+            depths.push(leaf.depth);
         }
+        // Three leaves a level, one level deeper each time, four at the end
+        // (popped nearest first: the chain's end comes first).
+        let mut want: Vec<u32> = vec![MAX_DEPTH; 4];
+        want.extend((1..MAX_DEPTH).rev().flat_map(|d| [d; 3]));
+        assert_eq!(depths, want);
         // Four children crossed in each cell of the chain: three leaves and
         // the next node, four leaves at the end.
         assert_eq!(w.visited as usize, 1 + 4 * depth);
