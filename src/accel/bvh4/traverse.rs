@@ -560,81 +560,34 @@ mod tests {
         let (nodes, tris) = caterpillar();
         assert_eq!(build::depth(&nodes), MAX_DEPTH);
         let rd = RayData::new(&Ray::new(Vec3::new(-10.0, 0.0, 0.0), Vec3::X));
-        let run = |f: &dyn Fn() -> (Option<Closest>, bool)| {
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
-        };
-        let (hit, blocked) = run(&|| {
-            (
-                closest::<_, _, _, DEEP>(
-                    Portable,
-                    &nodes,
-                    &tris,
-                    &TrianglesOnly,
-                    &rd,
-                    0.0,
-                    f32::INFINITY,
-                    &mut NoStats,
-                ),
-                any::<_, _, _, DEEP>(
-                    Portable,
-                    &nodes,
-                    &tris,
-                    &TrianglesOnly,
-                    &rd,
-                    0.0,
-                    f32::INFINITY,
-                    NO_ITEM,
-                    &mut NoStats,
-                ),
-            )
-        })
-        .expect("DEEP entries suffice");
+        // Both walks with an `N`-entry stack, up to `tmax`: `None` if the
+        // stack overflowed (a panic), else the closest hit and `any`.
+        fn walks<const N: usize>(
+            nodes: &[Node],
+            tris: &[Tri4],
+            rd: &RayData,
+            tmax: f32,
+        ) -> Option<(Option<Closest>, bool)> {
+            let (f, s) = (&TrianglesOnly, &mut NoStats);
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let hit = closest::<_, _, _, N>(Portable, nodes, tris, f, rd, 0.0, tmax, s);
+                (
+                    hit,
+                    any::<_, _, _, N>(Portable, nodes, tris, f, rd, 0.0, tmax, NO_ITEM, s),
+                )
+            }))
+            .ok()
+        }
+        let (hit, blocked) = walks::<DEEP>(&nodes, &tris, &rd, f32::INFINITY).expect("enough");
         let hit = hit.expect("the triangle at x = 4");
         assert_eq!((hit.t, hit.id), (14.0, 7));
         assert!(blocked);
-        // A ray that stops short of the triangle: `any` then walks the whole
-        // chain too, every leaf pending.
-        assert!(!any::<_, _, _, DEEP>(
-            Portable,
-            &nodes,
-            &tris,
-            &TrianglesOnly,
-            &rd,
-            0.0,
-            13.0,
-            NO_ITEM,
-            &mut NoStats
-        ));
+        // A ray that stops short of the triangle: both walks go through the
+        // whole chain, every leaf pending.
+        assert_eq!(walks::<DEEP>(&nodes, &tris, &rd, 13.0), Some((None, false)));
         const SHORT: usize = DEEP - 1;
-        assert!(run(&|| (
-            closest::<_, _, _, SHORT>(
-                Portable,
-                &nodes,
-                &tris,
-                &TrianglesOnly,
-                &rd,
-                0.0,
-                f32::INFINITY,
-                &mut NoStats
-            ),
-            false
-        ))
-        .is_err());
-        assert!(run(&|| (
-            None,
-            any::<_, _, _, SHORT>(
-                Portable,
-                &nodes,
-                &tris,
-                &TrianglesOnly,
-                &rd,
-                0.0,
-                13.0,
-                NO_ITEM,
-                &mut NoStats
-            )
-        ))
-        .is_err());
+        assert!(walks::<SHORT>(&nodes, &tris, &rd, f32::INFINITY).is_none());
+        assert!(walks::<SHORT>(&nodes, &tris, &rd, 13.0).is_none());
     }
 
     /// The AVX box test gives the portable test's masks and distances bit
