@@ -216,20 +216,14 @@ mod tests {
     /// never reach most of these loops.
     #[test]
     fn settling_from_any_start_cell_brackets_t0() {
-        let mut seed = 0x2545_f491_u32;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as f32 / u32::MAX as f32
-        };
+        let mut r = crate::accel::testutil::Rng::new(17);
         let lat = Lattice::new(Aabb::new(Vec3::ZERO, Vec3::new(4.0, 5.0, 6.0)), [4, 5, 3]);
         let mut checked = 0;
         for i in 0..1000 {
-            let o = Vec3::new(rnd() * 8.0 - 2.0, rnd() * 9.0 - 2.0, rnd() * 10.0 - 2.0);
-            let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+            let o = r.v(-2.0, 8.0);
+            let d = r.v(-0.5, 0.5);
             // Some starts exactly on a boundary plane (t0 = a plane's t).
-            let tmin = if i % 3 == 0 { 0.0 } else { rnd() * 4.0 };
+            let tmin = if i % 3 == 0 { 0.0 } else { r.f() * 4.0 };
             let mut w = CellWalk::new(&lat, &Ray::new(o, d), tmin, f32::INFINITY);
             if w.done {
                 continue;
