@@ -12,6 +12,7 @@ mod sphere;
 mod transformed;
 mod triangle;
 mod triangle4;
+mod triangle4_avx;
 
 pub use moving::Moving;
 pub use plane::Plane;
@@ -20,7 +21,10 @@ pub use transformed::Transformed;
 pub use triangle::{
     intersect_triangle, is_degenerate_triangle, Triangle, TriangleHit, WatertightRay,
 };
-pub use triangle4::{may_hit4, WatertightRay4};
+pub use triangle4::{may_hit4, RaySpace4, WatertightRay4};
+#[cfg(target_arch = "x86_64")]
+pub use triangle4_avx::hit4_avx;
+pub use triangle4_avx::Hits4;
 
 use crate::math::{Aabb, Ray, SurfacePoint};
 

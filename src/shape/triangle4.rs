@@ -43,6 +43,9 @@ pub struct WatertightRay4 {
     /// The shear's x and y, splatted.
     sx: Vec4,
     sy: Vec4,
+    /// The shear's z (`1 / d_z`), splatted: the exact 4-lane test scales
+    /// the z coordinates by it.
+    pub(super) sz: Vec4,
 }
 
 impl WatertightRay4 {
@@ -59,7 +62,34 @@ impl WatertightRay4 {
             ],
             sx: Vec4::splat(r.shear.x),
             sy: Vec4::splat(r.shear.y),
+            sz: Vec4::splat(r.shear.z),
         }
+    }
+}
+
+/// Four triangles in ray space (`WatertightRay::transform`, lane-wise):
+/// `x[k]`, `y[k]`, `z[k]` are vertex `k`'s coordinates, one lane per
+/// triangle, `z` not yet scaled by the shear.
+#[derive(Clone, Copy, Debug)]
+pub struct RaySpace4 {
+    pub(super) x: [Vec4; 3],
+    pub(super) y: [Vec4; 3],
+    pub(super) z: [Vec4; 3],
+}
+
+impl RaySpace4 {
+    /// The vertices `v` of a block (`v[k][a]` is coordinate `a` of vertex
+    /// `k`) in the ray space of `r`: the very f32 operations of
+    /// `WatertightRay::transform`, so each lane holds the scalar test's
+    /// values exactly.
+    #[inline(always)]
+    pub fn new(r: &WatertightRay4, v: &[[Vec4; 3]; 3]) -> Self {
+        let [kx, ky, kz] = r.k;
+        let (o, sx, sy) = (&r.o, r.sx, r.sy);
+        let z = [v[0][kz] - o[2], v[1][kz] - o[2], v[2][kz] - o[2]];
+        let x = std::array::from_fn(|i| (v[i][kx] - o[0]) + sx * z[i]);
+        let y = std::array::from_fn(|i| (v[i][ky] - o[1]) + sy * z[i]);
+        RaySpace4 { x, y, z }
     }
 }
 
@@ -71,25 +101,27 @@ impl WatertightRay4 {
 /// [`WatertightRay`].
 #[inline(always)]
 pub fn may_hit4(r: &WatertightRay4, v: &[[Vec4; 3]; 3]) -> u32 {
-    let [kx, ky, kz] = r.k;
-    let (o, sx, sy) = (&r.o, r.sx, r.sy);
-    // `WatertightRay::transform`, lane-wise: the same f32 operations.
-    let ray_space = |p: &[Vec4; 3]| {
-        let (qx, qy, qz) = (p[kx] - o[0], p[ky] - o[1], p[kz] - o[2]);
-        (qx + sx * qz, qy + sy * qz)
-    };
-    let (a, b, c) = (ray_space(&v[0]), ray_space(&v[1]), ray_space(&v[2]));
-    // (proven negative, proven positive) for the edge function of p, q:
-    // a strict order of the rounded products is the exact one (see above).
-    let signs = |p: (Vec4, Vec4), q: (Vec4, Vec4)| {
-        let (u, w) = (p.0 * q.1, p.1 * q.0);
-        (u.cmplt(w), u.cmpgt(w))
-    };
-    let (n0, p0) = signs(b, c);
-    let (n1, p1) = signs(c, a);
-    let (n2, p2) = signs(a, b);
-    let rejected = (n0 | n1 | n2) & (p0 | p1 | p2);
-    !rejected.bitmask() & 0xf
+    RaySpace4::new(r, v).may_hit()
+}
+
+impl RaySpace4 {
+    /// [`may_hit4`] on vertices already in ray space.
+    #[inline(always)]
+    pub fn may_hit(&self) -> u32 {
+        let (x, y) = (&self.x, &self.y);
+        // (proven negative, proven positive) for the edge function of
+        // vertices i, j: a strict order of the rounded products is the
+        // exact one (see above).
+        let signs = |i: usize, j: usize| {
+            let (u, w) = (x[i] * y[j], y[i] * x[j]);
+            (u.cmplt(w), u.cmpgt(w))
+        };
+        let (n0, p0) = signs(1, 2);
+        let (n1, p1) = signs(2, 0);
+        let (n2, p2) = signs(0, 1);
+        let rejected = (n0 | n1 | n2) & (p0 | p1 | p2);
+        !rejected.bitmask() & 0xf
+    }
 }
 
 #[cfg(test)]

@@ -698,6 +698,20 @@ mod tests {
         assert!(b1.any(&one[..], &s, 0.0, inf, ns));
         assert!(!b1.any_except(&one[..], &s, 0.0, inf, 0, ns));
         assert!(b1.any_except(&one[..], &s, 0.0, inf, 1, ns));
+        // The same triangle again behind the ray's origin, in the same
+        // block: the 4-lane pre-test (which ignores the `t` range) keeps
+        // both lanes, the exact test hits the skipped one alone.
+        let mut two = vec![one[0].clone(), one[0].clone()];
+        let behind = |p: Vec3| p - 6.0 * tr.normal;
+        two[1].shape = crate::shape::Shape::Triangle(crate::shape::Triangle::new(
+            behind(tr.v[0]),
+            behind(tr.v[1]),
+            behind(tr.v[2]),
+        ));
+        let b2 = Bvh4::new(&two, vec![0, 1]);
+        assert_eq!(b2.tris.len(), 1, "one block");
+        assert!(b2.any(&two[..], &s, 0.0, inf, ns));
+        assert!(!b2.any_except(&two[..], &s, 0.0, inf, 0, ns));
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use super::lanes::{Lanes, W};
 use super::node::{is_leaf, leaf_range, prefetch, Node, Tri4, EMPTY, NO_ITEM, OTHER};
 use crate::math::{Ray, Vec3};
-use crate::shape::{intersect_triangle, may_hit4, WatertightRay, WatertightRay4};
+use crate::shape::{intersect_triangle, RaySpace4, WatertightRay, WatertightRay4};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
@@ -161,11 +161,14 @@ impl LeafRay {
     }
 
     /// The watertight test (`shape::triangle::intersect_triangle`) on the
-    /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)` and
-    /// their parameters. A 4-lane f32 pre-test (`shape::may_hit4`) drops the
-    /// lanes it proves missed; each remaining lane calls the very function
-    /// brute force calls, so results are bit-identical. Unused and
-    /// non-triangle lanes (NaN vertices) are skipped by their ids.
+    /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)`, their
+    /// parameters and barycentrics (`bary[k][lane]`). A 4-lane f32 pre-test
+    /// (`RaySpace4::may_hit`) drops the lanes it proves missed; if any
+    /// remain, the AVX copy runs the exact test on all four lanes at once
+    /// (`shape::hit4_avx`), the portable one calls the very function brute
+    /// force calls once per remaining lane: results are bit-identical either
+    /// way. Unused and non-triangle lanes (NaN vertices) are skipped by
+    /// their ids.
     ///
     /// Lanes holding item `skip` are not tested ([`NO_ITEM`] skips none:
     /// unused lanes are never tested anyway).
@@ -175,19 +178,33 @@ impl LeafRay {
     /// the test for them (the any-hit walk ignores them; they are dead code
     /// there once inlined).
     #[inline(always)]
-    fn triangles(
+    fn triangles<B: BoxTest>(
         &self,
+        bt: B,
         b: &Tri4,
         tmin: f32,
         tmax: f32,
         skip: u32,
-    ) -> (u32, [f32; 4], [[f32; 3]; 4]) {
-        let mut mask = 0;
+    ) -> (u32, [f32; 4], [[f32; 4]; 3]) {
+        let rs = RaySpace4::new(&self.w4, &b.v);
+        let mut todo = rs.may_hit() & triangle_lanes(b) & !lanes_of(b, skip);
         // Arrays, not a `Vec4`: a `Vec4` indexed by a run-time lane compiles
         // to a jump table.
         let mut t = [0.0; 4];
-        let mut bary = [[0.0; 3]; 4];
-        let mut todo = may_hit4(&self.w4, &b.v) & triangle_lanes(b) & !lanes_of(b, skip);
+        let mut bary = [[0.0; 4]; 3];
+        if todo == 0 {
+            return (0, t, bary);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if bt.avx().is_some() {
+            // SAFETY: an `Avx` token exists only where AVX2 (hence AVX) was
+            // detected at run time (see `Avx::new`).
+            let h = unsafe { crate::shape::hit4_avx(&self.w4, &rs, tmin, tmax) };
+            return (h.mask & todo, h.t, h.b);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = bt;
+        let mut mask = 0;
         while todo != 0 {
             let lane = todo.trailing_zeros() as usize;
             todo &= todo - 1;
@@ -195,7 +212,9 @@ impl LeafRay {
             if let Some(h) = intersect_triangle(&self.wt, p(0), p(1), p(2), tmin, tmax) {
                 mask |= 1 << lane;
                 t[lane] = h.t;
-                bary[lane] = h.b;
+                for (k, w) in h.b.into_iter().enumerate() {
+                    bary[k][lane] = w;
+                }
             }
         }
         (mask, t, bary)
@@ -387,7 +406,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                let (mut mask, t, bary) = lr.triangles(b, tmin, tmax, NO_ITEM);
+                let (mut mask, t, bary) = lr.triangles(bt, b, tmin, tmax, NO_ITEM);
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -396,7 +415,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
                         best = Some(Closest {
                             t: t[i],
                             id: b.ids[i],
-                            bary: Some(bary[i]),
+                            bary: Some([bary[0][i], bary[1][i], bary[2][i]]),
                         });
                     }
                 }
@@ -486,7 +505,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                if lr.triangles(b, tmin, tmax, skip).0 != 0 {
+                if lr.triangles(bt, b, tmin, tmax, skip).0 != 0 {
                     break 'walk true;
                 }
                 if b.has_other()
