@@ -209,7 +209,10 @@ mod tests {
             let tmax = 1.0 + (g.next() - 0.5) * 1e-6;
             hits += check(&ray, &tris, 1e-4, tmax);
         }
-        assert!(hits > 20_000, "{hits}");
+        // Measured: 67,215 lane hits in about 120,000 checks (some rays
+        // miss lane 0's triangle, some hits fall outside the short range,
+        // and other lanes are hit now and then).
+        assert!((50_000..90_000).contains(&hits), "{hits}");
     }
 
     /// Unused lanes (NaN vertices), huge coordinates whose products
