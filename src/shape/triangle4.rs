@@ -125,22 +125,35 @@ impl RaySpace4 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::math::testing::Lcg;
     use crate::math::{Ray, Vec3};
     use crate::shape::intersect_triangle;
 
-    fn block(t: &[[Vec3; 3]; 4]) -> [[Vec4; 3]; 3] {
-        let mut v = [[Vec4::ZERO; 3]; 3];
-        for (lane, tri) in t.iter().enumerate() {
-            for k in 0..3 {
-                for a in 0..3 {
-                    v[k][a][lane] = tri[k][a];
-                }
-            }
-        }
-        v
+    /// The block of four triangles, `v[k][a]` holding coordinate `a` of
+    /// vertex `k` lane by lane.
+    pub(in crate::shape) fn block(t: &[[Vec3; 3]; 4]) -> [[Vec4; 3]; 3] {
+        std::array::from_fn(|k| std::array::from_fn(|a| Vec4::from_array(t.map(|tri| tri[k][a]))))
+    }
+
+    /// Case `i` of the random blocks both 4-lane tests check: four
+    /// triangles at one of six scales (1e-30 to 1e30) and three offsets,
+    /// and a point of lane 0's triangle to aim at: a vertex, a point of an
+    /// edge (where edge functions tie or nearly do) or near the interior.
+    /// Returns the triangles, the point and the scale.
+    pub(in crate::shape) fn aimed(g: &mut Lcg, i: usize) -> ([[Vec3; 3]; 4], Vec3, f32) {
+        let scale = [1e-30f32, 1e-6, 1.0, 1e3, 1e15, 1e30][i % 6];
+        let centre = g.vec(scale * [0.0, 2.0, 1e4][i / 6 % 3]);
+        let tris: [[Vec3; 3]; 4] = std::array::from_fn(|_| [0; 3].map(|_| centre + g.vec(scale)));
+        let [a, b, c] = tris[0];
+        let s = g.next();
+        let target = match i % 3 {
+            0 => a,
+            1 => a + s * (b - a),
+            _ => (a + b + c) / 3.0 + g.vec(scale * 0.5),
+        };
+        (tris, target, scale)
     }
 
     /// Checks the filter's promise on one ray and block of four triangles.
@@ -167,23 +180,7 @@ mod tests {
         let mut g = Lcg(7);
         let (mut hits, mut kept, mut total) = (0, 0, 0);
         for i in 0..40_000 {
-            let scale = [1e-30f32, 1e-6, 1.0, 1e3, 1e15, 1e30][i % 6];
-            let centre = g.vec(scale * [0.0, 2.0, 1e4][i / 6 % 3]);
-            let tris: [[Vec3; 3]; 4] = std::array::from_fn(|_| {
-                [
-                    centre + g.vec(scale),
-                    centre + g.vec(scale),
-                    centre + g.vec(scale),
-                ]
-            });
-            // Aim at a vertex, an edge point or an interior point of lane 0.
-            let [a, b, c] = tris[0];
-            let s = g.next();
-            let target = match i % 3 {
-                0 => a,
-                1 => a + s * (b - a),
-                _ => (a + b + c) / 3.0 + g.vec(scale * 0.5),
-            };
+            let (tris, target, scale) = aimed(&mut g, i);
             let from = target + g.vec(scale * 8.0);
             let ray = Ray::new(from, target - from);
             if !ray.dir.is_finite() || ray.dir == Vec3::ZERO {

@@ -134,11 +134,8 @@ mod tests {
     use super::*;
     use crate::math::testing::Lcg;
     use crate::math::{Ray, Vec3};
+    use crate::shape::triangle4::tests::{aimed, block};
     use crate::shape::{intersect_triangle, WatertightRay};
-
-    fn block(t: &[[Vec3; 3]; 4]) -> [[Vec4; 3]; 3] {
-        std::array::from_fn(|k| std::array::from_fn(|a| Vec4::from_array(t.map(|tri| tri[k][a]))))
-    }
 
     /// Checks one ray against four triangles: every lane's answer is the
     /// scalar test's, `t` and barycentrics bit for bit. Returns the hits.
@@ -175,22 +172,12 @@ mod tests {
         let mut g = Lcg(11);
         let mut hits = 0;
         for i in 0..40_000 {
-            let scale = [1e-30f32, 1e-6, 1.0, 1e3, 1e15, 1e30][i % 6];
-            let centre = g.vec(scale * [0.0, 2.0, 1e4][i / 6 % 3]);
-            let mut tris: [[Vec3; 3]; 4] =
-                std::array::from_fn(|_| [0; 3].map(|_| centre + g.vec(scale)));
+            let (mut tris, target, scale) = aimed(&mut g, i);
             if i % 7 == 0 {
                 // A shared edge, and a degenerate lane.
                 tris[1] = [tris[0][1], tris[0][0], tris[1][2]];
                 tris[3] = [tris[0][0], tris[0][1], tris[0][0]];
             }
-            let [a, b, c] = tris[0];
-            let s = g.next();
-            let target = match i % 3 {
-                0 => a,
-                1 => a + s * (b - a),
-                _ => (a + b + c) / 3.0 + g.vec(scale * 0.5),
-            };
             // Near origins (reach 1e-8 to 1e-4 of the triangles' size) put
             // `t` near the scalar test's `deltaT`, which then decides.
             let reach = match i / 18 % 4 {
