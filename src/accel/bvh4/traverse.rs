@@ -284,28 +284,35 @@ fn lanes_of(b: &Tri4, id: u32) -> u32 {
         .bitmask()
 }
 
-/// Starts loading the children in `mask` (nodes or first blocks), so that
-/// the nearest one's load and the others' overlap.
+/// Starts loading child `c` (a node or its leaf's first block): a node
+/// with several children hit prefetches each as it pushes or sorts it, so
+/// that the nearest one's load and the others' overlap (one pass over the
+/// mask: a separate prefetch pass cost the any-hit walk 7% more
+/// instructions).
 #[inline(always)]
-fn prefetch_children(nodes: &[Node], tris: &[Tri4], node: &Node, mut mask: u32) {
-    while mask != 0 {
-        let c = node.child[mask.trailing_zeros() as usize];
-        mask &= mask - 1;
-        if !is_leaf(c) {
-            if let Some(n) = nodes.get(c as usize) {
-                prefetch(n);
-            }
-        } else if let Some(b) = tris.get(leaf_range(c).0) {
-            prefetch(b);
+fn prefetch_child(nodes: &[Node], tris: &[Tri4], c: u32) {
+    if !is_leaf(c) {
+        if let Some(n) = nodes.get(c as usize) {
+            prefetch(n);
         }
+    } else if let Some(b) = tris.get(leaf_range(c).0) {
+        prefetch(b);
     }
 }
 
 /// Pushes the children in `mask` (at least two) far to near and returns the
 /// nearest, so that the nearest is visited first and the others are popped
-/// in order of distance.
+/// in order of distance; starts loading each ([`prefetch_child`]).
 #[inline(always)]
-fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: &mut usize) -> u32 {
+fn order(
+    nodes: &[Node],
+    tris: &[Tri4],
+    node: &Node,
+    mut mask: u32,
+    dist: Lanes,
+    stack: &mut [(u32, f32)],
+    sp: &mut usize,
+) -> u32 {
     // An array, not `Lanes` indexing: a `Vec4` indexed by a run-time lane
     // compiles to a jump table.
     let dist = dist.to_array();
@@ -319,6 +326,8 @@ fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: 
             second.trailing_zeros() as usize,
         );
         let (a, b) = ((node.child[i], dist[i]), (node.child[j], dist[j]));
+        prefetch_child(nodes, tris, a.0);
+        prefetch_child(nodes, tris, b.0);
         let (near, far) = if a.1 < b.1 { (a, b) } else { (b, a) };
         stack[*sp] = far;
         *sp += 1;
@@ -331,6 +340,7 @@ fn order(node: &Node, mut mask: u32, dist: Lanes, stack: &mut [(u32, f32)], sp: 
         mask &= mask - 1;
         // Insertion sort, far first.
         let e = (node.child[i], dist[i]);
+        prefetch_child(nodes, tris, e.0);
         let mut j = k;
         while j > 0 && kids[j - 1].1 < e.1 {
             kids[j] = kids[j - 1];
@@ -394,8 +404,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
                 } else {
-                    prefetch_children(nodes, tris, node, mask);
-                    order(node, mask, dist, &mut stack, &mut sp)
+                    order(nodes, tris, node, mask, dist, &mut stack, &mut sp)
                 };
                 continue;
             }
@@ -485,17 +494,20 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
             // more than it saves for shadow rays.
             let (mut mask, _) = rd.boxes(bt, node, tmin4, tmax4);
             if mask != 0 {
-                if mask & (mask - 1) != 0 {
-                    prefetch_children(nodes, tris, node, mask);
-                }
-                let first = mask.trailing_zeros() as usize;
+                cur = node.child[mask.trailing_zeros() as usize];
                 mask &= mask - 1;
-                while mask != 0 {
-                    stack[sp] = node.child[mask.trailing_zeros() as usize];
-                    sp += 1;
-                    mask &= mask - 1;
+                if mask != 0 {
+                    // Several children: start loading them all, pushing
+                    // the others in the same pass.
+                    prefetch_child(nodes, tris, cur);
+                    while mask != 0 {
+                        let c = node.child[mask.trailing_zeros() as usize];
+                        prefetch_child(nodes, tris, c);
+                        stack[sp] = c;
+                        sp += 1;
+                        mask &= mask - 1;
+                    }
                 }
-                cur = node.child[first];
                 continue;
             }
         } else if cur != EMPTY {
