@@ -11,7 +11,9 @@
 //! (`traverse::RayData::boxes_avx`, given an `Avx` token made only here).
 
 use super::node::{Node, Tri4};
-use super::traverse::{self, BoxTest, Closest, Fallback, Portable, RayData, DEEP, SHALLOW};
+use super::traverse::{
+    self, BoxTest, Closest, Fallback, Portable, RayData, ANY_OCTANT, DEEP, SHALLOW,
+};
 use crate::math::Ray;
 use crate::stats::TraversalStats;
 
@@ -60,6 +62,56 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     portable::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep)
 }
 
+/// `$walk` with `O` the ray's octant as a constant: one copy of the walk per
+/// octant, so that the node step loads each of its six planes from a fixed
+/// offset in the node (no index reloaded per plane from the stack, where
+/// register pressure puts it).
+///
+/// Used for the any-hit walk only. Measured (session 13, Intel Xeon): the
+/// octant copies took 6.1% fewer instructions an any-hit query and 6.6% a
+/// closest one (callgrind, every 16th bunny40k ray); timed, shadow rays ran
+/// 4-8% faster and coherent camera rays 2-3%, but incoherent closest-hit
+/// rays, which switch octant from ray to ray, 4-13% slower. An AO render
+/// (incoherent any-hit rays) kept its time within 1%.
+macro_rules! by_octant {
+    ($rd:expr, |O| $walk:expr) => {
+        match $rd.octant() {
+            0 => {
+                const O: usize = 0;
+                $walk
+            }
+            1 => {
+                const O: usize = 1;
+                $walk
+            }
+            2 => {
+                const O: usize = 2;
+                $walk
+            }
+            3 => {
+                const O: usize = 3;
+                $walk
+            }
+            4 => {
+                const O: usize = 4;
+                $walk
+            }
+            5 => {
+                const O: usize = 5;
+                $walk
+            }
+            6 => {
+                const O: usize = 6;
+                $walk
+            }
+            _ => {
+                const O: usize = 7;
+                $walk
+            }
+        }
+    };
+}
+
 /// The closest-hit walk with box test `bt`: the ray's constants, then the
 /// stack the tree's depth needs. Always inlined, so that each copy below
 /// compiles it with its own target features.
@@ -78,9 +130,13 @@ fn closest_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
 ) -> Option<Closest> {
     let rd = &RayData::new(ray);
     if deep {
-        traverse::closest::<S, F, _, DEEP>(bt, nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::closest::<S, F, _, DEEP, ANY_OCTANT>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
+        )
     } else {
-        traverse::closest::<S, F, _, SHALLOW>(bt, nodes, tris, fallback, rd, tmin, tmax, stats)
+        traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
+        )
     }
 }
 
@@ -100,10 +156,13 @@ fn any_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
 ) -> bool {
     let rd = &RayData::new(ray);
     if deep {
-        traverse::any::<S, F, _, DEEP>(bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats)
-    } else {
-        traverse::any::<S, F, _, SHALLOW>(bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats)
+        return traverse::any::<S, F, _, DEEP, ANY_OCTANT>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
+        );
     }
+    by_octant!(rd, |O| traverse::any::<S, F, _, SHALLOW, O>(
+        bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats
+    ))
 }
 
 /// The portable copies, out of line: inlined into the dispatchers above,

@@ -48,7 +48,13 @@ pub(crate) struct RayData {
     /// ray's octant).
     near: [usize; 3],
     far: [usize; 3],
+    /// Bit `a` set where the ray runs towards −axis `a` (see [`octant`](Self::octant)).
+    octant: usize,
 }
+
+/// The octant parameter of [`closest`] and [`any`] that reads the ray's
+/// planes from [`RayData`] at run time (`0..8` fixes them at compile time).
+pub(crate) const ANY_OCTANT: usize = 8;
 
 /// What a ray needs at leaves: the watertight test's permutation and shear,
 /// and the same splatted for the four-lane pre-test. Made at the first leaf
@@ -78,6 +84,32 @@ impl RayData {
             ],
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
+            octant: neg(0) | neg(1) << 1 | neg(2) << 2,
+        }
+    }
+
+    /// The ray's octant, `0..8`: the `O` for which [`closest`] and [`any`]
+    /// know its near and far planes at compile time.
+    #[inline(always)]
+    pub fn octant(&self) -> usize {
+        self.octant
+    }
+
+    /// Indices into `Node::planes` of the near and far plane per axis: from
+    /// `O` when it is an octant (constant offsets: the node step then loads
+    /// each plane straight from the node, with no index to reload), else
+    /// from the ray.
+    #[inline(always)]
+    fn planes<const O: usize>(&self) -> ([usize; 3], [usize; 3]) {
+        if O < ANY_OCTANT {
+            debug_assert_eq!(O, self.octant);
+            let s = |a: usize| (O >> a) & 1;
+            (
+                [3 * s(0), 1 + 3 * s(1), 2 + 3 * s(2)],
+                [3 - 3 * s(0), 4 - 3 * s(1), 5 - 3 * s(2)],
+            )
+        } else {
+            (self.near, self.far)
         }
     }
 
@@ -90,20 +122,27 @@ impl RayData {
     /// their second operand when either is NaN, so such a slab is
     /// ignored (the box is kept: conservative, never a missed hit).
     #[inline(always)]
-    fn boxes<B: BoxTest>(&self, bt: B, n: &Node, tmin: Lanes, tmax: Lanes) -> (u32, Lanes) {
+    fn boxes<B: BoxTest, const O: usize>(
+        &self,
+        bt: B,
+        n: &Node,
+        tmin: Lanes,
+        tmax: Lanes,
+    ) -> (u32, Lanes) {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = bt.avx() {
-            return self.boxes_avx(avx, n, tmin, tmax);
+            return self.boxes_avx::<O>(avx, n, tmin, tmax);
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = bt;
         let p = &n.planes;
-        let tnx = p[self.near[0]].sub_mul(self.org[0], self.inv[0]);
-        let tny = p[self.near[1]].sub_mul(self.org[1], self.inv[1]);
-        let tnz = p[self.near[2]].sub_mul(self.org[2], self.inv[2]);
-        let tfx = p[self.far[0]].sub_mul(self.org[0], self.inv[0]);
-        let tfy = p[self.far[1]].sub_mul(self.org[1], self.inv[1]);
-        let tfz = p[self.far[2]].sub_mul(self.org[2], self.inv[2]);
+        let (near, far) = self.planes::<O>();
+        let tnx = p[near[0]].sub_mul(self.org[0], self.inv[0]);
+        let tny = p[near[1]].sub_mul(self.org[1], self.inv[1]);
+        let tnz = p[near[2]].sub_mul(self.org[2], self.inv[2]);
+        let tfx = p[far[0]].sub_mul(self.org[0], self.inv[0]);
+        let tfy = p[far[1]].sub_mul(self.org[1], self.inv[1]);
+        let tfz = p[far[2]].sub_mul(self.org[2], self.inv[2]);
         let tn = tnx.max(tny.max(tnz.max(tmin)));
         let tf = tfx.min(tfy.min(tfz.min(tmax)));
         (tn.le_mask(tf), tn)
@@ -121,7 +160,13 @@ impl RayData {
     /// `_mm256_*` intrinsics then inline into that AVX2 function.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn boxes_avx(&self, _: Avx, n: &Node, tmin: Lanes, tmax: Lanes) -> (u32, Lanes) {
+    fn boxes_avx<const O: usize>(
+        &self,
+        _: Avx,
+        n: &Node,
+        tmin: Lanes,
+        tmax: Lanes,
+    ) -> (u32, Lanes) {
         use std::arch::x86_64::*;
         // SAFETY: an `Avx` value exists only where AVX2 (hence AVX) was
         // detected at run time (`Avx::new` is `unsafe` with that contract,
@@ -136,12 +181,13 @@ impl RayData {
             let (o, i) = (&self.org, &self.inv);
             let t =
                 |k: usize, a: usize| _mm256_mul_ps(_mm256_sub_ps(ld(&p[k]), ld(&o[a])), ld(&i[a]));
-            let tnx = t(self.near[0], 0);
-            let tny = t(self.near[1], 1);
-            let tnz = t(self.near[2], 2);
-            let tfx = t(self.far[0], 0);
-            let tfy = t(self.far[1], 1);
-            let tfz = t(self.far[2], 2);
+            let (near, far) = self.planes::<O>();
+            let tnx = t(near[0], 0);
+            let tny = t(near[1], 1);
+            let tnz = t(near[2], 2);
+            let tfx = t(far[0], 0);
+            let tfy = t(far[1], 1);
+            let tfz = t(far[2], 2);
             let tn = _mm256_max_ps(tnx, _mm256_max_ps(tny, _mm256_max_ps(tnz, ld(&tmin))));
             let tf = _mm256_min_ps(tfx, _mm256_min_ps(tfy, _mm256_min_ps(tfz, ld(&tmax))));
             let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(tn, tf)) as u32;
@@ -371,7 +417,13 @@ pub(crate) struct Closest {
 /// AVX2 copy compiles it with AVX2.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+pub(crate) fn closest<
+    S: TraversalStats,
+    F: Fallback + ?Sized,
+    B: BoxTest,
+    const N: usize,
+    const O: usize,
+>(
     bt: B,
     nodes: &[Node],
     tris: &[Tri4],
@@ -399,7 +451,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
             if S::ENABLED {
                 n_nodes += 1;
             }
-            let (mask, dist) = rd.boxes(bt, node, tmin4, Lanes::splat(tmax));
+            let (mask, dist) = rd.boxes::<_, O>(bt, node, tmin4, Lanes::splat(tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
@@ -463,7 +515,13 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
 /// not tested. Always inlined (see [`closest`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+pub(crate) fn any<
+    S: TraversalStats,
+    F: Fallback + ?Sized,
+    B: BoxTest,
+    const N: usize,
+    const O: usize,
+>(
     bt: B,
     nodes: &[Node],
     tris: &[Tri4],
@@ -492,7 +550,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
             }
             // No ordering: any occluder ends the walk, and sorting costs
             // more than it saves for shadow rays.
-            let (mut mask, _) = rd.boxes(bt, node, tmin4, tmax4);
+            let (mut mask, _) = rd.boxes::<_, O>(bt, node, tmin4, tmax4);
             if mask != 0 {
                 cur = node.child[mask.trailing_zeros() as usize];
                 mask &= mask - 1;
@@ -601,10 +659,13 @@ mod tests {
         ) -> Option<(Option<Closest>, bool)> {
             let (f, s) = (&TrianglesOnly, &mut NoStats);
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                let hit = closest::<_, _, _, N>(Portable, nodes, tris, f, rd, 0.0, tmax, s);
+                let hit =
+                    closest::<_, _, _, N, ANY_OCTANT>(Portable, nodes, tris, f, rd, 0.0, tmax, s);
                 (
                     hit,
-                    any::<_, _, _, N>(Portable, nodes, tris, f, rd, 0.0, tmax, NO_ITEM, s),
+                    any::<_, _, _, N, ANY_OCTANT>(
+                        Portable, nodes, tris, f, rd, 0.0, tmax, NO_ITEM, s,
+                    ),
                 )
             }))
             .ok()
@@ -619,6 +680,49 @@ mod tests {
         const SHORT: usize = DEEP - 1;
         assert!(walks::<SHORT>(&nodes, &tris, &rd, f32::INFINITY).is_none());
         assert!(walks::<SHORT>(&nodes, &tris, &rd, 13.0).is_none());
+    }
+
+    /// Each octant's compile-time planes are the ones `RayData` picks at run
+    /// time for a ray in that octant (zero components included: `−0` runs
+    /// towards −axis, `+0` towards +axis), so each octant's copy of the walk
+    /// tests the same planes.
+    #[test]
+    fn octant_copies_use_the_rays_planes() {
+        fn check<const O: usize>() {
+            for zero in [false, true] {
+                let c = |a: usize, x: f32| {
+                    let x = if zero && a == O % 3 { 0.0 } else { x };
+                    if (O >> a) & 1 == 1 {
+                        -x
+                    } else {
+                        x
+                    }
+                };
+                let dir = Vec3::new(c(0, 0.3), c(1, 0.5), c(2, 0.7));
+                let rd = RayData::new(&Ray::new(Vec3::new(0.1, -0.2, 0.3), dir));
+                assert_eq!(rd.octant(), O, "{dir:?}");
+                assert_eq!(rd.planes::<O>(), rd.planes::<ANY_OCTANT>(), "{dir:?}");
+                let mut node = Node::EMPTY;
+                node.set(0, 0, Vec3::splat(-1.0), Vec3::splat(1.0));
+                node.set(1, 0, Vec3::splat(0.5), Vec3::splat(2.0));
+                let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(10.0));
+                let (m, d) = rd.boxes::<_, O>(Portable, &node, tmin, tmax);
+                let (rm, rdist) = rd.boxes::<_, ANY_OCTANT>(Portable, &node, tmin, tmax);
+                assert_eq!(
+                    (m, d.to_array().map(f32::to_bits)),
+                    (rm, rdist.to_array().map(f32::to_bits))
+                );
+                assert_eq!(m & 1, 1, "the box around the origin");
+            }
+        }
+        check::<0>();
+        check::<1>();
+        check::<2>();
+        check::<3>();
+        check::<4>();
+        check::<5>();
+        check::<6>();
+        check::<7>();
     }
 
     /// The AVX box test gives the portable test's masks and distances bit
@@ -648,8 +752,8 @@ mod tests {
             let dir = Vec3::new(rnd() * 0.5, rnd() * 0.5, rnd() * 0.5);
             let rd = RayData::new(&Ray::new(Vec3::new(rnd(), rnd(), rnd()), dir));
             let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(rnd().abs() + 1.0));
-            let (pm, pd) = rd.boxes(Portable, &node, tmin, tmax);
-            let (am, ad) = rd.boxes(avx, &node, tmin, tmax);
+            let (pm, pd) = rd.boxes::<_, ANY_OCTANT>(Portable, &node, tmin, tmax);
+            let (am, ad) = rd.boxes::<_, ANY_OCTANT>(avx, &node, tmin, tmax);
             assert_eq!(pm, am);
             for i in 0..W {
                 assert_eq!(pd[i].to_bits(), ad[i].to_bits(), "{dir:?} lane {i}");
