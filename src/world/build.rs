@@ -432,6 +432,55 @@ mod tests {
         assert!((h.t - 8.0).abs() < 1e-5);
     }
 
+    /// `occluded_leaving` skips the plane a shadow ray leaves, and only it:
+    /// between a floor and a ceiling, a ray up from the floor is blocked by
+    /// the ceiling (one plane test: its own plane is not tried), a ray up
+    /// from the ceiling is free, and one down from the ceiling meets the
+    /// floor.
+    #[test]
+    fn a_ray_leaving_a_plane_skips_that_plane_only() {
+        let plane = |offset: f32| Node::Shape {
+            shape: Desc::Plane {
+                normal: Vec3::Y,
+                offset,
+            },
+            material: None,
+        };
+        let w = World::build(
+            &scene(Node::Group(vec![plane(0.0), plane(1.0)])),
+            BuildOptions::default(),
+        );
+        let mut c = Counters::default();
+        let down = Ray::new(Vec3::new(0.3, 0.5, 0.2), Vec3::new(0.1, -1.0, 0.0));
+        let up = Ray::new(Vec3::new(0.3, 0.5, 0.2), Vec3::new(0.1, 1.0, 0.0));
+        let floor = w.intersect(&down, 0.0, f32::INFINITY, &mut c).unwrap();
+        let ceiling = w.intersect(&up, 0.0, f32::INFINITY, &mut c).unwrap();
+        assert_ne!(floor.prim, ceiling.prim);
+        let leave = |h: &crate::world::Hit, d: Vec3, c: &mut Counters| {
+            let mut s = crate::math::Spawn::leaving(h.surface_point(), h.prim);
+            let r = s.spawn_ray(d);
+            w.occluded_leaving(&r, 0.0, f32::INFINITY, Some(h.prim), c)
+        };
+        let before = c.intersection_tests;
+        assert!(
+            leave(&floor, Vec3::Y, &mut c),
+            "the ceiling shadows the floor"
+        );
+        assert_eq!(
+            c.intersection_tests - before,
+            1,
+            "the floor itself is not tested"
+        );
+        assert!(
+            !leave(&ceiling, Vec3::Y, &mut c),
+            "nothing above the ceiling"
+        );
+        assert!(
+            leave(&ceiling, Vec3::NEG_Y, &mut c),
+            "the floor below the ceiling"
+        );
+    }
+
     #[test]
     fn flattening_off_gives_the_same_hits() {
         let m = Mat4::from_translation(Vec3::new(0.5, 0.0, 0.0)) * Mat4::from_rotation_z(0.4);
