@@ -177,10 +177,17 @@ impl RayData {
         // is between two 32-byte plain-float types.
         unsafe {
             let ld = |l: &Lanes| _mm256_loadu_ps(l as *const Lanes as *const f32);
+            // The ray's splats are re-broadcast from their low four lanes,
+            // not loaded whole: `RayData::new` writes each `Lanes` as two
+            // 16-byte halves, and a 32-byte load of two separate stores
+            // cannot be forwarded from them (it waits for both to reach the
+            // cache, at every query). Same values, so the same results.
+            let bc =
+                |l: &Lanes| _mm256_broadcastss_ps(_mm_loadu_ps(l as *const Lanes as *const f32));
             let p = &n.planes;
             let (o, i) = (&self.org, &self.inv);
             let t =
-                |k: usize, a: usize| _mm256_mul_ps(_mm256_sub_ps(ld(&p[k]), ld(&o[a])), ld(&i[a]));
+                |k: usize, a: usize| _mm256_mul_ps(_mm256_sub_ps(ld(&p[k]), bc(&o[a])), bc(&i[a]));
             let (near, far) = self.planes::<O>();
             let tnx = t(near[0], 0);
             let tny = t(near[1], 1);
