@@ -404,6 +404,7 @@ impl ShadowTarget {
     /// light's sample likewise, with its own end offset out of its error
     /// bound too. The ray travels at instant `time` (motion blur: shadows
     /// of moving objects are cast where they are at that instant).
+    #[inline(always)] // (its result went through memory in pieces: see `phong_light`)
     fn ray_from(self, from: &mut Spawn, time: f32) -> (Ray, f32) {
         let (ray, tmax) = match self {
             ShadowTarget::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),

@@ -55,7 +55,9 @@ pub fn abs_linear(m: &Mat4) -> Mat3 {
 /// the offset plane, and then rounds each moved coordinate one more ulp away
 /// from `p` (the sum `p + offset` rounds too). A ray starting there cannot
 /// re-hit the surface it leaves, whatever its direction.
-#[inline]
+// Always inlined: out of line, its Vec3 arguments stalled on store
+// forwarding (see `material::phong_light`).
+#[inline(always)]
 pub fn offset_ray_origin(p: Vec3, err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(err);
     let mut offset = d * n;

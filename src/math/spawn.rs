@@ -47,11 +47,21 @@ impl Spawn {
 
     /// `from.offset_origin(w)`: the side is decided by the very test
     /// `offset_ray_origin` makes, so a cached origin is the one it returns.
-    #[inline]
+    // Always inlined: the origin just computed is used from registers
+    // (out of line it came back through memory in pieces, a
+    // store-forwarding stall; see `material::phong_light`).
+    #[inline(always)]
     fn origin(&mut self, w: Vec3) -> Vec3 {
         let f = &self.from;
         let side = usize::from(w.dot(f.n) < 0.0);
-        *self.origins[side].get_or_insert_with(|| offset_ray_origin(f.p, f.error, f.n, w))
+        // (Not `get_or_insert_with`: LLVM kept that out of line, and the
+        // origin came back through memory.)
+        if let Some(o) = self.origins[side] {
+            return o;
+        }
+        let o = offset_ray_origin(f.p, f.error, f.n, w);
+        self.origins[side] = Some(o);
+        o
     }
 
     /// [`SurfacePoint::spawn_ray`].

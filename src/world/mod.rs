@@ -194,6 +194,7 @@ impl World {
     /// spawned rays never re-hit their own surface). A plane is flat too:
     /// the one a ray leaves is not tested. Curved, moving and instanced
     /// primitives are tested as usual.
+    #[inline(always)] // (the shadow ray stays in registers: see `phong_light`)
     pub fn occluded_leaving(
         &self,
         ray: &Ray,
