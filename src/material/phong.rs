@@ -115,6 +115,34 @@ mod tests {
         assert_eq!(specular_power(0.5, 1.0), 0.5);
     }
 
+    /// Whole exponents up to the limit take the squaring path, the same
+    /// bits on every platform (here: the product written out for `e = 10`
+    /// and `e = 1024`); above it and for fractions, `powf` itself.
+    #[test]
+    fn whole_exponents_are_squared_others_use_powf() {
+        for k in 0..=100 {
+            let s = k as f32 / 100.0;
+            let (s2, s8) = (s * s, (s * s) * (s * s) * ((s * s) * (s * s)));
+            assert_eq!(
+                specular_power(s, 10.0).to_bits(),
+                (s2 * s8).to_bits(),
+                "{s}"
+            );
+            let mut p = s;
+            for _ in 0..10 {
+                p *= p;
+            }
+            assert_eq!(specular_power(s, 1024.0).to_bits(), p.to_bits(), "{s}");
+            for e in [1025.0, 2.5] {
+                assert_eq!(
+                    specular_power(s, e).to_bits(),
+                    s.powf(e).to_bits(),
+                    "{s}^{e}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn light_straight_behind_gives_nothing() {
         let c = phong_light(&m(), Vec3::Y, Vec3::NEG_Y, Vec3::Y, Vec3::ONE);
