@@ -1,12 +1,17 @@
 //! The traversal compiled twice: for the x86-64 baseline (SSE2) and for
-//! AVX2, picked per query by a run-time check of the CPU (a cached flag).
+//! AVX2 with FMA, picked per query by a run-time check of the CPU (a cached
+//! flag).
 //!
 //! Why: release binaries must run on any x86-64, so glam's `Vec4` compiles
 //! to SSE2; the AVX2 copy of the same source gets three-operand (VEX)
-//! instructions and more freedom in scheduling. The arithmetic is the same
-//! IEEE operations in the same order (Rust never fuses a multiply and an
-//! add, and the min/max intrinsics keep their SSE semantics), so both copies
-//! return bit-identical results. Elsewhere only the portable copy exists.
+//! instructions, fused multiply-adds and more freedom in scheduling. The
+//! arithmetic is the same IEEE operations in the same order (Rust never
+//! fuses a multiply and an add on its own; the box test's fused ones are
+//! `f32::mul_add`, one rounding on every target, and the min/max intrinsics
+//! keep their SSE semantics), so both copies return bit-identical results.
+//! Elsewhere only the portable copy exists. The price of that identity: on
+//! an x86-64 without FMA (before 2013) the portable copy's `mul_add` is a
+//! call to the C library's exact `fmaf`, slower than a multiply and an add.
 //! The AVX2 copy also tests a node's eight boxes with 256-bit operations
 //! (`traverse::RayData::boxes_avx`, given an `Avx` token made only here).
 
@@ -32,9 +37,10 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
     deep: bool,
 ) -> Option<Closest> {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: calling a `#[target_feature(enable = "avx2")]` function is
-        // sound exactly when the CPU supports AVX2, checked just above.
+    if avx2_fma() {
+        // SAFETY: calling a `#[target_feature(enable = "avx2,fma")]` function
+        // is sound exactly when the CPU supports AVX2 and FMA, checked just
+        // above.
         return unsafe { avx2::closest(nodes, tris, fallback, ray, tmin, tmax, stats, deep) };
     }
     portable::closest(nodes, tris, fallback, ray, tmin, tmax, stats, deep)
@@ -55,11 +61,19 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
     deep: bool,
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: as in `closest`: AVX2 is present, checked just above.
+    if avx2_fma() {
+        // SAFETY: as in `closest`: AVX2 and FMA are present, checked just
+        // above.
         return unsafe { avx2::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep) };
     }
     portable::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep)
+}
+
+/// Whether the CPU has AVX2 and FMA (each a cached flag).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn avx2_fma() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 /// `$walk` with `O` the ray's octant as a constant: one copy of the walk per
@@ -216,14 +230,14 @@ mod portable {
 }
 
 /// The AVX2 copies: the portable traversal inlined into functions compiled
-/// with AVX2 enabled.
+/// with AVX2 and FMA enabled.
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::*;
     use crate::accel::bvh4::traverse::Avx;
 
     #[allow(clippy::too_many_arguments)]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     pub(super) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
         nodes: &[Node],
         tris: &[Tri4],
@@ -234,14 +248,14 @@ mod avx2 {
         stats: &mut S,
         deep: bool,
     ) -> Option<Closest> {
-        // SAFETY: these functions are called only after
-        // `is_x86_feature_detected!("avx2")` (`Avx::new`'s contract).
+        // SAFETY: these functions are called only after `avx2_fma()`
+        // (`Avx::new`'s contract).
         let avx = unsafe { Avx::new() };
         closest_with(avx, nodes, tris, fallback, ray, tmin, tmax, stats, deep)
     }
 
     #[allow(clippy::too_many_arguments)]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     pub(super) fn any<S: TraversalStats, F: Fallback + ?Sized>(
         nodes: &[Node],
         tris: &[Tri4],
@@ -252,8 +266,8 @@ mod avx2 {
         stats: &mut S,
         deep: bool,
     ) -> bool {
-        // SAFETY: these functions are called only after
-        // `is_x86_feature_detected!("avx2")` (`Avx::new`'s contract).
+        // SAFETY: these functions are called only after `avx2_fma()`
+        // (`Avx::new`'s contract).
         let avx = unsafe { Avx::new() };
         any_with(
             avx,

@@ -28,10 +28,15 @@ impl Lanes {
         Lanes([Vec4::splat(x); 2])
     }
 
-    /// `(self − o) · m`: the slab distance of one plane per lane.
+    /// `self · m − s`, fused (one rounding, on every target: `mul_add` is an
+    /// FMA instruction where the CPU has one, else the C library's exact
+    /// `fmaf`): the slab distance of one plane per lane.
     #[inline(always)]
-    pub fn sub_mul(self, o: Lanes, m: Lanes) -> Lanes {
-        Lanes([(self.0[0] - o.0[0]) * m.0[0], (self.0[1] - o.0[1]) * m.0[1]])
+    pub fn mul_sub(self, m: Lanes, s: Lanes) -> Lanes {
+        Lanes([
+            self.0[0].mul_add(m.0[0], -s.0[0]),
+            self.0[1].mul_add(m.0[1], -s.0[1]),
+        ])
     }
 
     /// Lane-wise `maxps(self, o)`: `o` when either is NaN.

@@ -526,6 +526,66 @@ mod tests {
         assert!(c.nodes_visited <= 12, "{c:?}");
     }
 
+    /// Rays parallel to axes (`+0` and `−0` components, and components far
+    /// below the `1e-18` the slab test clamps to), some running exactly
+    /// along the terrain's grid planes and its boxes' faces, find brute
+    /// force's hits; and they still cull on the axes they do not move
+    /// along: straight down, they visit no more nodes than the same rays
+    /// tilted a little (a zero component's slab, left NaN, would keep every
+    /// box at the ray's height: several times as many).
+    #[test]
+    fn axis_parallel_rays_agree_and_still_cull() {
+        let prims = terrain();
+        let b = Bvh4::new(&prims, all(&prims));
+        let mut r = crate::accel::testutil::Rng::new(5);
+        let mut queries = Vec::new();
+        for i in 0..400 {
+            let (x, z) = (64.0 * r.f(), 64.0 * r.f());
+            let (x, z) = if i % 4 == 0 {
+                (x.floor(), z.floor())
+            } else {
+                (x, z)
+            };
+            let (sx, sz) = if i % 2 == 0 {
+                (0.0, -0.0)
+            } else {
+                (-1e-30, 1e-25)
+            };
+            queries.push((
+                Ray::new(Vec3::new(x, 30.0, z), Vec3::new(sx, -1.0, sz)),
+                0.0,
+                f32::INFINITY,
+            ));
+            let along_x = Ray::new(
+                Vec3::new(-3.0, -1.0 + 2.0 * r.f(), z),
+                Vec3::new(1.0, 0.0, sz),
+            );
+            queries.push((along_x, 0.0, f32::INFINITY));
+        }
+        let mut c = Counters::default();
+        crate::accel::testutil::assert_agrees_on(&b, &prims, queries.iter().copied());
+        for (q, _, _) in queries.iter().step_by(2) {
+            b.intersect(&prims, q, 0.0, f32::INFINITY, &mut c);
+        }
+        let mut tilted = Counters::default();
+        for (q, _, _) in queries.iter().step_by(2) {
+            let d = Vec3::new(1e-3, -1.0, 1e-3);
+            b.intersect(
+                &prims,
+                &Ray::new(q.origin, d),
+                0.0,
+                f32::INFINITY,
+                &mut tilted,
+            );
+        }
+        assert!(
+            c.nodes_visited <= tilted.nodes_visited + tilted.nodes_visited / 10,
+            "{} nodes straight down, {} tilted",
+            c.nodes_visited,
+            tilted.nodes_visited
+        );
+    }
+
     #[test]
     fn both_stack_sizes_agree() {
         let prims = soup(9, 3000);
