@@ -143,14 +143,19 @@ fn closest_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
     deep: bool,
 ) -> Option<Closest> {
     let rd = &RayData::new(ray);
-    if deep {
-        traverse::closest::<S, F, _, DEEP, ANY_OCTANT>(
+    match (deep, rd.reduce_as_ints(tmin)) {
+        (false, true) => traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT, true>(
             bt, nodes, tris, fallback, rd, tmin, tmax, stats,
-        )
-    } else {
-        traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT>(
+        ),
+        (true, true) => traverse::closest::<S, F, _, DEEP, ANY_OCTANT, true>(
             bt, nodes, tris, fallback, rd, tmin, tmax, stats,
-        )
+        ),
+        (false, false) => traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT, false>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
+        ),
+        (true, false) => traverse::closest::<S, F, _, DEEP, ANY_OCTANT, false>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
+        ),
     }
 }
 
@@ -169,14 +174,22 @@ fn any_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
     deep: bool,
 ) -> bool {
     let rd = &RayData::new(ray);
-    if deep {
-        return traverse::any::<S, F, _, DEEP, ANY_OCTANT>(
+    match (deep, rd.reduce_as_ints(tmin)) {
+        (false, true) => by_octant!(rd, |O| traverse::any::<S, F, _, SHALLOW, O, true>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats
+        )),
+        (true, true) => traverse::any::<S, F, _, DEEP, ANY_OCTANT, true>(
             bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
-        );
+        ),
+        // Rare (a negative `tmin`, an origin beyond about 1e20): one copy
+        // per stack, the octant read at run time.
+        (false, false) => traverse::any::<S, F, _, SHALLOW, ANY_OCTANT, false>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
+        ),
+        (true, false) => traverse::any::<S, F, _, DEEP, ANY_OCTANT, false>(
+            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
+        ),
     }
-    by_octant!(rd, |O| traverse::any::<S, F, _, SHALLOW, O>(
-        bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats
-    ))
 }
 
 /// The portable copies, out of line: inlined into the dispatchers above,

@@ -586,6 +586,34 @@ mod tests {
         );
     }
 
+    /// Queries the integer reduction cannot take (a negative `tmin`, `−0`,
+    /// an origin so far out that `origin · inv` overflows) run the float
+    /// one and still find brute force's hits, closest and any.
+    #[test]
+    fn queries_off_the_integer_path_agree_with_brute_force() {
+        let prims = soup(13, 2000);
+        let b = Bvh4::new(&prims, all(&prims));
+        let mut r = crate::accel::testutil::Rng::new(3);
+        let mut queries = Vec::new();
+        for i in 0..600 {
+            let q = crate::accel::testutil::ray(&mut r);
+            let tmin = [-1.0, -0.0, -1e-3][i % 3];
+            queries.push((q, tmin, f32::INFINITY));
+            // From 1e22 away, aimed back through the soup (the integer
+            // path: `origin · inv` is about 1); then a ray parallel to y at
+            // y = 4e20, whose clamped `inv` (1e18) overflows that product:
+            // only a ray that cannot reach the scene in finite `t` can.
+            let far = Ray::new(q.origin * 1e22, q.origin * -1e22);
+            queries.push((far, 0.5, 1.5));
+            let along = Ray::new(Vec3::new(1e21, 4e20, q.origin.z), Vec3::NEG_X);
+            queries.push((along, 0.0, f32::INFINITY));
+        }
+        let rd = |q: usize| traverse::RayData::new(&queries[q].0);
+        assert!(rd(1).reduce_as_ints(0.5));
+        assert!(!rd(2).reduce_as_ints(0.0), "the origin's product overflows");
+        crate::accel::testutil::assert_agrees_on(&b, &prims, queries);
+    }
+
     #[test]
     fn both_stack_sizes_agree() {
         let prims = soup(9, 3000);

@@ -52,6 +52,9 @@ pub(crate) struct RayData {
     far: [usize; 3],
     /// Bit `a` set where the ray runs towards −axis `a` (see [`octant`](Self::octant)).
     octant: usize,
+    /// Whether every `origin · inv` is finite: then no slab distance is
+    /// NaN (see [`reduce_as_ints`](Self::reduce_as_ints)).
+    finite: bool,
 }
 
 /// The octant parameter of [`closest`] and [`any`] that reads the ray's
@@ -110,7 +113,23 @@ impl RayData {
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
             octant: neg(0) | neg(1) << 1 | neg(2) << 2,
+            finite: oi.is_finite(),
         }
+    }
+
+    /// Whether [`boxes`](Self::boxes) may reduce a query's slab distances
+    /// with integer operations: `tmin` is `+0` or more (not NaN, not `−0`)
+    /// and no slab distance can be NaN. A slab distance `plane · inv −
+    /// origin · inv` is NaN only if `origin · inv` is not finite: `inv` is
+    /// finite (clamped, see [`safe_inverse`]; NaN only for a NaN
+    /// direction, which makes `origin · inv` NaN too), planes are finite or
+    /// `±inf` (an empty slot), and a finite `origin · inv` subtracted from a
+    /// finite or infinite product is never NaN. Such rays (an origin beyond
+    /// about `1e20`, a NaN ray) and negative `tmin` take the float
+    /// reduction.
+    #[inline(always)]
+    pub fn reduce_as_ints(&self, tmin: f32) -> bool {
+        self.finite && tmin >= 0.0 && tmin.is_sign_positive()
     }
 
     /// The ray's octant, `0..8`: the `O` for which [`closest`] and [`any`]
@@ -150,14 +169,30 @@ impl RayData {
     ///
     /// The four distances per side are reduced as a tree, `max(max(x, y),
     /// max(z, tmin))`, not a chain: one dependent operation fewer in the
-    /// walk's critical path from a node's load to its children's mask. A
-    /// NaN slab distance (an `inf − inf`, from planes beyond `1e20` or a NaN
-    /// ray) still never rejects a box: `Lanes::max`/`min` return their
-    /// second operand when either is NaN, a NaN slab is always a first
-    /// operand, and a NaN result of the inner pair is again a first operand
-    /// (`tmin` and `tmax` are never NaN), so such a slab is ignored.
+    /// walk's critical path from a node's load to its children's mask.
+    ///
+    /// With `I` ([`reduce_as_ints`](Self::reduce_as_ints)), the
+    /// reduction and the final `tn <= tf` compare the f32 bit patterns as
+    /// `i32` (Embree's AVX-512 traversal does the same): one-cycle integer
+    /// operations in place of four-cycle float ones on that critical path.
+    /// Exact, because `tmin ≥ +0` sits in the `max` and no operand is NaN:
+    /// the integer order is the float order among values with the sign bit
+    /// clear, and every negative value (`−0` too) is below `+0`, so `tn` is
+    /// the float maximum (a negative slab never wins against `tmin`); and
+    /// where some far distance is negative, `tf` comes out negative (not
+    /// necessarily the most negative), below `tn`: the box is rejected as
+    /// the float test rejects it. The one difference is a far distance of
+    /// exactly `−0`, which the float test keeps and this one rejects: the
+    /// ray leaves that box at `t = 0`, where a hit (`t > tmin ≥ 0`) cannot
+    /// be; the boxes' padding dwarfs the rounding of a distance that near.
+    ///
+    /// Without `I`, a NaN slab distance (an `inf − inf`) never rejects a
+    /// box: `Lanes::max`/`min` return their second operand when either is
+    /// NaN, a NaN slab is always a first operand, and a NaN result of the
+    /// inner pair is again a first operand (`tmin` and `tmax` are never
+    /// NaN), so such a slab is ignored.
     #[inline(always)]
-    fn boxes<B: BoxTest, const O: usize>(
+    fn boxes<B: BoxTest, const O: usize, const I: bool>(
         &self,
         bt: B,
         n: &Node,
@@ -166,7 +201,7 @@ impl RayData {
     ) -> (u32, Lanes) {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = bt.avx() {
-            return self.boxes_avx::<O>(avx, n, tmin, tmax);
+            return self.boxes_avx::<O, I>(avx, n, tmin, tmax);
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = bt;
@@ -178,16 +213,23 @@ impl RayData {
         let tfx = p[far[0]].mul_sub(self.inv[0], self.oi[0]);
         let tfy = p[far[1]].mul_sub(self.inv[1], self.oi[1]);
         let tfz = p[far[2]].mul_sub(self.inv[2], self.oi[2]);
+        if I {
+            let tn = tnx.max_bits(tny).max_bits(tnz.max_bits(tmin));
+            let tf = tfx.min_bits(tfy).min_bits(tfz.min_bits(tmax));
+            return (tn.le_mask_bits(tf), tn);
+        }
         let tn = tnx.max(tny).max(tnz.max(tmin));
         let tf = tfx.min(tfy).min(tfz.min(tmax));
         (tn.le_mask(tf), tn)
     }
 
-    /// [`boxes`](Self::boxes) with 256-bit AVX operations: the same IEEE
+    /// [`boxes`](Self::boxes) with 256-bit AVX operations: the same
     /// operations on the same operands in the same order (`vfmsub`, fused
-    /// as `f32::mul_add` is, `vmaxps`/`vminps` in the same tree, whose NaN
-    /// rule is `maxps`'s, and an ordered `<=` compare), so the mask and the
-    /// distances are bit-identical to the portable test.
+    /// as `f32::mul_add` is; `vmaxps`/`vminps` in the same tree, whose NaN
+    /// rule is `maxps`'s, and an ordered `<=` compare; or `vpmaxsd`/
+    /// `vpminsd` and `vpcmpgtd`, the `i32` order of the portable
+    /// `*_bits`), so the mask and the distances are bit-identical to the
+    /// portable test.
     ///
     /// Deliberately no `#[target_feature]`: a function with one cannot be
     /// `#[inline(always)]`, and LLVM kept it out of line (a call per node).
@@ -195,7 +237,7 @@ impl RayData {
     /// `_mm256_*` intrinsics then inline into that AVX2 function.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn boxes_avx<const O: usize>(
+    fn boxes_avx<const O: usize, const I: bool>(
         &self,
         _: Avx,
         n: &Node,
@@ -229,6 +271,17 @@ impl RayData {
             let tfx = t(far[0], 0);
             let tfy = t(far[1], 1);
             let tfz = t(far[2], 2);
+            if I {
+                let i = |v: __m256| _mm256_castps_si256(v);
+                let max = |a: __m256i, b: __m256i| _mm256_max_epi32(a, b);
+                let min = |a: __m256i, b: __m256i| _mm256_min_epi32(a, b);
+                let tn = max(max(i(tnx), i(tny)), max(i(tnz), i(ld(&tmin))));
+                let tf = min(min(i(tfx), i(tfy)), min(i(tfz), i(ld(&tmax))));
+                // `tn <= tf` is `!(tn > tf)`: AVX2 has only the latter.
+                let out = _mm256_castsi256_ps(_mm256_cmpgt_epi32(tn, tf));
+                let mask = !(_mm256_movemask_ps(out) as u32) & 0xff;
+                return (mask, std::mem::transmute::<__m256i, Lanes>(tn));
+            }
             let tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, ld(&tmin)));
             let tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, ld(&tmax)));
             let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(tn, tf)) as u32;
@@ -465,6 +518,7 @@ pub(crate) fn closest<
     B: BoxTest,
     const N: usize,
     const O: usize,
+    const I: bool,
 >(
     bt: B,
     nodes: &[Node],
@@ -482,6 +536,7 @@ pub(crate) fn closest<
     let mut best: Option<Closest> = None;
     let mut tmax = tmax;
     let tmin4 = Lanes::splat(tmin);
+    debug_assert!(!I || rd.reduce_as_ints(tmin));
     let mut stack = [(0u32, 0f32); N];
     let mut sp = 0usize;
     // Made at the first leaf (see `LeafRay`).
@@ -493,7 +548,7 @@ pub(crate) fn closest<
             if S::ENABLED {
                 n_nodes += 1;
             }
-            let (mask, dist) = rd.boxes::<_, O>(bt, node, tmin4, Lanes::splat(tmax));
+            let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
@@ -563,6 +618,7 @@ pub(crate) fn any<
     B: BoxTest,
     const N: usize,
     const O: usize,
+    const I: bool,
 >(
     bt: B,
     nodes: &[Node],
@@ -579,6 +635,7 @@ pub(crate) fn any<
     }
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
     let (tmin4, tmax4) = (Lanes::splat(tmin), Lanes::splat(tmax));
+    debug_assert!(!I || rd.reduce_as_ints(tmin));
     let mut stack = [0u32; N];
     let mut sp = 0usize;
     // Made at the first leaf (see `LeafRay`).
@@ -592,7 +649,7 @@ pub(crate) fn any<
             }
             // No ordering: any occluder ends the walk, and sorting costs
             // more than it saves for shadow rays.
-            let (mut mask, _) = rd.boxes::<_, O>(bt, node, tmin4, tmax4);
+            let (mut mask, _) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
             if mask != 0 {
                 cur = node.child[mask.trailing_zeros() as usize];
                 mask &= mask - 1;
@@ -701,11 +758,12 @@ mod tests {
         ) -> Option<(Option<Closest>, bool)> {
             let (f, s) = (&TrianglesOnly, &mut NoStats);
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                let hit =
-                    closest::<_, _, _, N, ANY_OCTANT>(Portable, nodes, tris, f, rd, 0.0, tmax, s);
+                let hit = closest::<_, _, _, N, ANY_OCTANT, true>(
+                    Portable, nodes, tris, f, rd, 0.0, tmax, s,
+                );
                 (
                     hit,
-                    any::<_, _, _, N, ANY_OCTANT>(
+                    any::<_, _, _, N, ANY_OCTANT, true>(
                         Portable, nodes, tris, f, rd, 0.0, tmax, NO_ITEM, s,
                     ),
                 )
@@ -748,13 +806,22 @@ mod tests {
                 node.set(0, 0, Vec3::splat(-1.0), Vec3::splat(1.0));
                 node.set(1, 0, Vec3::splat(0.5), Vec3::splat(2.0));
                 let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(10.0));
-                let (m, d) = rd.boxes::<_, O>(Portable, &node, tmin, tmax);
-                let (rm, rdist) = rd.boxes::<_, ANY_OCTANT>(Portable, &node, tmin, tmax);
-                assert_eq!(
-                    (m, d.to_array().map(f32::to_bits)),
-                    (rm, rdist.to_array().map(f32::to_bits))
-                );
-                assert_eq!(m & 1, 1, "the box around the origin");
+                for ((m, d), (rm, rdist)) in [
+                    (
+                        rd.boxes::<_, O, false>(Portable, &node, tmin, tmax),
+                        rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax),
+                    ),
+                    (
+                        rd.boxes::<_, O, true>(Portable, &node, tmin, tmax),
+                        rd.boxes::<_, ANY_OCTANT, true>(Portable, &node, tmin, tmax),
+                    ),
+                ] {
+                    assert_eq!(
+                        (m, d.to_array().map(f32::to_bits)),
+                        (rm, rdist.to_array().map(f32::to_bits))
+                    );
+                    assert_eq!(m & 1, 1, "the box around the origin");
+                }
             }
         }
         check::<0>();
@@ -797,12 +864,82 @@ mod tests {
             let dir = Vec3::new(rnd() * 0.5, rnd() * 0.5, rnd() * 0.5);
             let rd = RayData::new(&Ray::new(Vec3::new(rnd(), rnd(), rnd()), dir));
             let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(rnd().abs() + 1.0));
-            let (pm, pd) = rd.boxes::<_, ANY_OCTANT>(Portable, &node, tmin, tmax);
-            let (am, ad) = rd.boxes::<_, ANY_OCTANT>(avx, &node, tmin, tmax);
-            assert_eq!(pm, am);
-            for i in 0..W {
-                assert_eq!(pd[i].to_bits(), ad[i].to_bits(), "{dir:?} lane {i}");
+            for ((pm, pd), (am, ad)) in [
+                (
+                    rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax),
+                    rd.boxes::<_, ANY_OCTANT, false>(avx, &node, tmin, tmax),
+                ),
+                (
+                    rd.boxes::<_, ANY_OCTANT, true>(Portable, &node, tmin, tmax),
+                    rd.boxes::<_, ANY_OCTANT, true>(avx, &node, tmin, tmax),
+                ),
+            ] {
+                assert_eq!(pm, am);
+                for i in 0..W {
+                    assert_eq!(pd[i].to_bits(), ad[i].to_bits(), "{dir:?} lane {i}");
+                }
             }
         }
+    }
+
+    /// The integer reduction keeps exactly the boxes the float one keeps,
+    /// at the same entry distances, but for boxes the ray leaves at `t = 0`
+    /// exactly (a far distance of `−0`: no hit in `t > tmin ≥ 0` can lie
+    /// there), on random boxes and rays with `tmin` of `+0` and above;
+    /// and a query with a negative `tmin`, `−0` or an infinite
+    /// `origin · inv` does not use it.
+    #[test]
+    fn integer_reduction_keeps_the_float_tests_boxes() {
+        let mut seed = 0x1234_5678_u32;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed % 9) as f32 - 4.0
+        };
+        let mut kept = 0;
+        for _ in 0..20_000 {
+            let mut node = Node::EMPTY;
+            for i in 0..W - (rnd() > 2.0) as usize {
+                let lo = Vec3::new(rnd(), rnd(), rnd());
+                let hi = lo + Vec3::new(rnd().abs(), rnd().abs(), rnd().abs());
+                node.set(i, 0, lo, hi);
+            }
+            let dir = Vec3::new(rnd() * 0.5, rnd() * 0.5, rnd() * 0.75);
+            let rd = RayData::new(&Ray::new(Vec3::new(rnd(), rnd(), rnd()), dir));
+            let t0 = rnd().abs() * 0.25;
+            assert!(rd.reduce_as_ints(t0));
+            let (tmin, tmax) = (Lanes::splat(t0), Lanes::splat(t0 + rnd().abs() + 1.0));
+            let (fm, fd) = rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax);
+            let (im, id) = rd.boxes::<_, ANY_OCTANT, true>(Portable, &node, tmin, tmax);
+            kept += im.count_ones();
+            for i in 0..W {
+                let (f, k) = (fm >> i & 1 == 1, im >> i & 1 == 1);
+                if f && k {
+                    assert_eq!(fd[i], id[i], "{dir:?} lane {i}");
+                } else if f != k {
+                    assert!(
+                        f && !k,
+                        "the integer test kept a box the float test rejects"
+                    );
+                    // A far distance of exactly `−0`, the only value `≥ 0`
+                    // as a float and negative as an integer.
+                    let (_, far) = rd.planes::<ANY_OCTANT>();
+                    let minus_zero = (0..3).any(|a| {
+                        let t = node.planes[far[a]][i].mul_add(rd.inv[a][0], -rd.oi[a][0]);
+                        t.to_bits() == (-0f32).to_bits()
+                    });
+                    assert!(t0 == 0.0 && minus_zero, "{dir:?} lane {i}");
+                }
+            }
+        }
+        // Measured: 4,753 boxes kept (and the float test's answer checked
+        // on every one of the 160,000 lanes).
+        assert!(kept > 2_000, "{kept}");
+        let rd = RayData::new(&Ray::new(Vec3::ZERO, Vec3::X));
+        assert!(rd.reduce_as_ints(0.0) && !rd.reduce_as_ints(-0.0));
+        assert!(!rd.reduce_as_ints(-1e-3) && !rd.reduce_as_ints(f32::NAN));
+        let far = RayData::new(&Ray::new(Vec3::new(1e21, 0.0, 0.0), Vec3::Y));
+        assert!(!far.reduce_as_ints(0.0), "1e21 · 1e18 overflows");
     }
 }
