@@ -7,7 +7,7 @@
 #   MESHES   default: bunny40k sphere1m sphere4m
 # Each repetition runs Embree's harness and `glint bench rays` back to back, per mesh and thread
 # count (1 and 2), so both see the same machine load; both report the best of 3 passes after a
-# warm-up. Ratios: throughput glint/Embree (>1: glint faster), build time glint/Embree MEDIUM (<1:
+# warm-up and the best of 5 builds. Ratios: throughput glint/Embree (>1: glint faster), build time glint/Embree MEDIUM (<1:
 # glint faster), both against Embree's default MEDIUM build and single-ray queries (rtcIntersect1 /
 # rtcOccluded1). Raw outputs are kept in WORKDIR/compare/.
 # THREADS="1 2" (default) picks the thread counts. BASELINE=path/to/an/older/glint also runs that
