@@ -10,7 +10,7 @@
 //!   children built in parallel above 16k items, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
 //!   nearest-child-first closest hit, unordered any hit with early exit.
-//! - `dispatch.rs`: the traversal compiled for SSE2 and for AVX2, picked at
+//! - `dispatch.rs`: the traversal compiled for SSE2 and for AVX2 with FMA, picked at
 //!   run time; `pages.rs`: the large arrays on transparent huge pages.
 //!
 //! What it shares with the textbook [`Bvh`](super::Bvh): the padding rule
