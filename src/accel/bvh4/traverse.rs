@@ -834,6 +834,41 @@ mod tests {
         check::<7>();
     }
 
+    /// Whole numbers in `[-4, 4]` from an xorshift: boxes and origins on
+    /// a shared grid, so origins on planes and zero direction components
+    /// come up often.
+    struct Grid(u32);
+
+    impl Grid {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            (self.0 % 9) as f32 - 4.0
+        }
+
+        /// A node with seven or eight boxes (the rest empty).
+        fn node(&mut self) -> Node {
+            let mut node = Node::EMPTY;
+            for i in 0..W - (self.next() > 2.0) as usize {
+                let lo = Vec3::new(self.next(), self.next(), self.next());
+                let hi = lo + Vec3::new(self.next().abs(), self.next().abs(), self.next().abs());
+                node.set(i, 0, lo, hi);
+            }
+            node
+        }
+
+        /// A ray from a grid point, its direction half the grid's values
+        /// in x and y and `z` times them in z.
+        fn ray(&mut self, z: f32) -> RayData {
+            let dir = Vec3::new(self.next() * 0.5, self.next() * 0.5, self.next() * z);
+            RayData::new(&Ray::new(
+                Vec3::new(self.next(), self.next(), self.next()),
+                dir,
+            ))
+        }
+    }
+
     /// The AVX box test gives the portable test's masks and distances bit
     /// for bit, directions with zero components (clamped by
     /// `safe_inverse`) and origins on a box's planes included.
@@ -847,23 +882,12 @@ mod tests {
         }
         // SAFETY: AVX2 and FMA detected just above.
         let avx = unsafe { Avx::new() };
-        let mut seed = 0x9e37_79b9_u32;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            (seed % 9) as f32 - 4.0
-        };
+        let mut g = Grid(0x9e37_79b9);
         for _ in 0..20_000 {
-            let mut node = Node::EMPTY;
-            for i in 0..W - (rnd() > 2.0) as usize {
-                let lo = Vec3::new(rnd(), rnd(), rnd());
-                let hi = lo + Vec3::new(rnd().abs(), rnd().abs(), rnd().abs());
-                node.set(i, 0, lo, hi);
-            }
-            let dir = Vec3::new(rnd() * 0.5, rnd() * 0.5, rnd() * 0.5);
-            let rd = RayData::new(&Ray::new(Vec3::new(rnd(), rnd(), rnd()), dir));
-            let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(rnd().abs() + 1.0));
+            let node = g.node();
+            let rd = g.ray(0.5);
+            let dir = rd.ray.dir;
+            let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(g.next().abs() + 1.0));
             for ((pm, pd), (am, ad)) in [
                 (
                     rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax),
@@ -890,26 +914,15 @@ mod tests {
     /// `origin · inv` does not use it.
     #[test]
     fn integer_reduction_keeps_the_float_tests_boxes() {
-        let mut seed = 0x1234_5678_u32;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            (seed % 9) as f32 - 4.0
-        };
+        let mut g = Grid(0x1234_5678);
         let mut kept = 0;
         for _ in 0..20_000 {
-            let mut node = Node::EMPTY;
-            for i in 0..W - (rnd() > 2.0) as usize {
-                let lo = Vec3::new(rnd(), rnd(), rnd());
-                let hi = lo + Vec3::new(rnd().abs(), rnd().abs(), rnd().abs());
-                node.set(i, 0, lo, hi);
-            }
-            let dir = Vec3::new(rnd() * 0.5, rnd() * 0.5, rnd() * 0.75);
-            let rd = RayData::new(&Ray::new(Vec3::new(rnd(), rnd(), rnd()), dir));
-            let t0 = rnd().abs() * 0.25;
+            let node = g.node();
+            let rd = g.ray(0.75);
+            let dir = rd.ray.dir;
+            let t0 = g.next().abs() * 0.25;
             assert!(rd.reduce_as_ints(t0));
-            let (tmin, tmax) = (Lanes::splat(t0), Lanes::splat(t0 + rnd().abs() + 1.0));
+            let (tmin, tmax) = (Lanes::splat(t0), Lanes::splat(t0 + g.next().abs() + 1.0));
             let (fm, fd) = rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax);
             let (im, id) = rd.boxes::<_, ANY_OCTANT, true>(Portable, &node, tmin, tmax);
             kept += im.count_ones();
