@@ -608,6 +608,9 @@ mod tests {
             let along = Ray::new(Vec3::new(1e21, 4e20, q.origin.z), Vec3::NEG_X);
             queries.push((along, 0.0, f32::INFINITY));
         }
+        // A NaN direction component: nothing is hit, by either.
+        let nan = Ray::new(Vec3::ZERO, Vec3::new(f32::NAN, 1.0, 0.5));
+        queries.push((nan, 0.0, f32::INFINITY));
         let rd = |q: usize| traverse::RayData::new(&queries[q].0);
         assert!(rd(1).reduce_as_ints(0.5));
         assert!(!rd(2).reduce_as_ints(0.0), "the origin's product overflows");
