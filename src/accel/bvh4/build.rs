@@ -7,7 +7,7 @@ use super::node::{is_leaf, leaf, leaf_range, Node, Tri4, EMPTY, MAX_LEAF_ITEMS, 
 use super::pages::huge_pages;
 use crate::accel::overlap::margin;
 use crate::math::{Aabb, Vec3};
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
 /// What one item of the source is.
@@ -48,19 +48,69 @@ const PARALLEL_BINNING: usize = 64 * 1024;
 /// pending children.
 pub(crate) const MAX_DEPTH: usize = 20;
 
-/// One item during the build: its bounds and id (32 bytes).
+/// One item during the build: its box, with its id and kind in the fourth
+/// lanes (32 bytes). Each corner is one aligned 16-byte load that is
+/// already a `Vec3A` (three 4-byte fields and an id took four instructions
+/// per corner to load, and the partition's swap then stalled reloading
+/// them). The fourth lanes hold small integers as floats (never denormal,
+/// which would slow the arithmetic that carries them along unused).
 #[derive(Clone, Copy, Debug)]
 struct PrimRef {
-    lo: Vec3,
-    id: u32,
-    hi: Vec3,
-    other: u32,
+    /// Lower corner; `w`: the id's low 16 bits.
+    lo: Vec4,
+    /// Upper corner; `w`: the id's high 15 bits, plus `2^15` for an item
+    /// that is not a triangle, or `−1` for one left out.
+    hi: Vec4,
 }
 
 impl PrimRef {
-    #[inline]
-    fn centroid(&self) -> Vec3 {
-        (self.lo + self.hi) * 0.5
+    /// The flag in `hi.w` of an item that is not a triangle.
+    const OTHER_W: u32 = 1 << 15;
+
+    /// Item `id` (below 2^31) with box `b`.
+    fn new(b: &Aabb, id: u32, other: bool) -> Self {
+        debug_assert!(id & OTHER == 0);
+        let high = (id >> 16) | if other { Self::OTHER_W } else { 0 };
+        PrimRef {
+            lo: b.min.extend((id & 0xffff) as f32),
+            hi: b.max.extend(high as f32),
+        }
+    }
+
+    /// A placeholder for an item that is left out.
+    fn skipped() -> Self {
+        PrimRef {
+            lo: Vec4::ZERO,
+            hi: Vec4::new(0.0, 0.0, 0.0, -1.0),
+        }
+    }
+
+    fn is_skipped(&self) -> bool {
+        self.hi.w < 0.0
+    }
+
+    #[inline(always)]
+    fn lo(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo)
+    }
+
+    #[inline(always)]
+    fn hi(&self) -> Vec3A {
+        Vec3A::from_vec4(self.hi)
+    }
+
+    #[inline(always)]
+    fn centroid(&self) -> Vec3A {
+        (self.lo() + self.hi()) * 0.5
+    }
+
+    fn id(&self) -> u32 {
+        self.lo.w as u32 | (self.hi.w as u32 & (Self::OTHER_W - 1)) << 16
+    }
+
+    /// Whether the item is not a triangle.
+    fn other(&self) -> bool {
+        self.hi.w as u32 & Self::OTHER_W != 0
     }
 }
 
@@ -109,24 +159,17 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
     // An indexed map writes straight into the vector (a filtering
     // collect would gather pieces and copy them); skipped items are
     // dropped afterwards in place.
-    const SKIPPED: u32 = u32::MAX;
     let mut refs: Vec<PrimRef> = Vec::with_capacity(n);
     huge_pages(&refs);
     refs.par_extend((0..n).into_par_iter().with_min_len(4096).map(|k| {
         let id = src.id(k);
-        let (b, other) = match src.item(id) {
-            Item::Triangle(v) => (Aabb::from_points(v), 0),
-            Item::Other(b) => (b, 1),
-            Item::Skip => (Aabb::EMPTY, SKIPPED),
-        };
-        PrimRef {
-            lo: b.min,
-            id,
-            hi: b.max,
-            other,
+        match src.item(id) {
+            Item::Triangle(v) => PrimRef::new(&Aabb::from_points(v), id, false),
+            Item::Other(b) => PrimRef::new(&b, id, true),
+            Item::Skip => PrimRef::skipped(),
         }
     }));
-    refs.retain(|r| r.other != SKIPPED);
+    refs.retain(|r| !r.is_skipped());
     let (bounds, cbounds) = bounds_of(&refs);
     if refs.is_empty() {
         return Built {
@@ -187,8 +230,8 @@ fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     let one = |r: &[PrimRef]| {
         r.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), p| {
             (
-                Aabb::new(b.min.min(p.lo), b.max.max(p.hi)),
-                c.grow(p.centroid()),
+                Aabb::new(b.min.min(p.lo.truncate()), b.max.max(p.hi.truncate())),
+                c.grow(p.centroid().into()),
             )
         })
     };
@@ -229,7 +272,7 @@ impl<const B: usize> Bins<B> {
 
     fn add(&mut self, refs: &[PrimRef], map: &BinMap) {
         for r in refs {
-            let (lo, hi) = (Vec3A::from(r.lo), Vec3A::from(r.hi));
+            let (lo, hi) = (r.lo(), r.hi());
             // The centroid lane-wise: the same operations as `centroid`.
             let k = map.bins::<B>((lo + hi) * 0.5);
             for a in 0..3 {
@@ -454,11 +497,12 @@ impl Builder {
                 // The same arithmetic as `BinMap::bins`, on one axis, without
                 // the conversion: for `k ≥ 0` and `pos ≤ bins − 1`,
                 // `trunc(min(k, bins − 1)) < pos` exactly when `k < pos`.
-                let pos_f = pos as f32;
-                partition(refs, |p| {
-                    let c = (p.lo[axis] + p.hi[axis]) * 0.5;
+                // All three axes at once, the plan's picked from the mask.
+                let (min, scale) = (Vec3A::splat(min), Vec3A::splat(scale));
+                let pos = Vec3A::splat(pos as f32);
+                partition(refs, |c| {
                     // NaN gives 0, as in `BinMap::bins`.
-                    ((c - min) * scale).max(0.0) < pos_f
+                    ((c - min) * scale).max(Vec3A::ZERO).cmplt(pos).bitmask() >> axis & 1 != 0
                 })
             }
             Plan::Median { axis } => {
@@ -607,9 +651,7 @@ impl Acc {
     }
 
     #[inline(always)]
-    fn add(&mut self, p: &PrimRef) {
-        let (lo, hi) = (Vec3A::from(p.lo), Vec3A::from(p.hi));
-        let c = (lo + hi) * 0.5;
+    fn add(&mut self, lo: Vec3A, hi: Vec3A, c: Vec3A) {
         self.lo = self.lo.min(lo);
         self.hi = self.hi.max(hi);
         self.clo = self.clo.min(c);
@@ -629,27 +671,42 @@ impl Acc {
 /// pass (a second pass over a large range costs as much as the partition).
 fn partition(
     v: &mut [PrimRef],
-    left: impl Fn(&PrimRef) -> bool,
+    left: impl Fn(Vec3A) -> bool,
 ) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
     let (mut l, mut r) = (Acc::new(), Acc::new());
+    // `v[..i]` go left, `v[j..]` right; each item is loaded once and its
+    // centroid computed once (the swap writes the values held).
     let (mut i, mut j) = (0, v.len());
     loop {
-        while i < j && left(&v[i]) {
-            l.add(&v[i]);
+        let (a, ca) = loop {
+            if i == j {
+                return (i, l.boxes(), r.boxes());
+            }
+            let (p, c) = (v[i], v[i].centroid());
+            if !left(c) {
+                break (p, c);
+            }
+            l.add(p.lo(), p.hi(), c);
             i += 1;
-        }
-        while i < j && !left(&v[j - 1]) {
-            r.add(&v[j - 1]);
+        };
+        // `a` (at `i`) goes right: find one from the end that goes left.
+        let (b, cb) = loop {
             j -= 1;
-        }
-        if i >= j {
-            return (i, l.boxes(), r.boxes());
-        }
-        v.swap(i, j - 1);
-        l.add(&v[i]);
-        r.add(&v[j - 1]);
+            if j == i {
+                r.add(a.lo(), a.hi(), ca);
+                return (i, l.boxes(), r.boxes());
+            }
+            let (p, c) = (v[j], v[j].centroid());
+            if left(c) {
+                break (p, c);
+            }
+            r.add(p.lo(), p.hi(), c);
+        };
+        v[i] = b;
+        v[j] = a;
+        l.add(b.lo(), b.hi(), cb);
+        r.add(a.lo(), a.hi(), ca);
         i += 1;
-        j -= 1;
     }
 }
 
@@ -701,12 +758,13 @@ fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<
 fn block<S: Source>(items: &[PrimRef], src: &S) -> Tri4 {
     let mut b = Tri4::EMPTY;
     for (lane, r) in items.iter().enumerate() {
-        if r.other != 0 {
-            b.ids[lane] = r.id | OTHER;
+        let id = r.id();
+        if r.other() {
+            b.ids[lane] = id | OTHER;
             continue;
         }
-        b.ids[lane] = r.id;
-        for (k, p) in src.vertices(r.id).iter().enumerate() {
+        b.ids[lane] = id;
+        for (k, p) in src.vertices(id).iter().enumerate() {
             for a in 0..3 {
                 b.v[k][a][lane] = p[a];
             }
@@ -725,12 +783,7 @@ mod tests {
         (0..n)
             .map(|i| {
                 let (c, h) = (r.v(-10.0, 10.0), r.v(0.0, 0.5));
-                PrimRef {
-                    lo: c - h,
-                    id: i as u32,
-                    hi: c + h,
-                    other: 0,
-                }
+                PrimRef::new(&Aabb::new(c - h, c + h), i as u32, false)
             })
             .collect()
     }
@@ -751,13 +804,36 @@ mod tests {
         centres
             .into_iter()
             .enumerate()
-            .map(|(i, c)| PrimRef {
-                lo: c - h,
-                id: i as u32,
-                hi: c + h,
-                other: 0,
-            })
+            .map(|(i, c)| PrimRef::new(&Aabb::new(c - h, c + h), i as u32, false))
             .collect()
+    }
+
+    /// A reference keeps its box, id and kind whatever the id (up to the
+    /// largest allowed, `2^31 − 1`), and its fourth lanes are plain floats
+    /// (zero or normal: a denormal there would slow every operation that
+    /// carries them along).
+    #[test]
+    fn references_keep_ids_and_kinds_in_plain_floats() {
+        let b = Aabb::new(Vec3::new(-1.0, 2.0, -3.0), Vec3::new(4.0, 5.0, 6.0));
+        for id in [
+            0,
+            1,
+            0xffff,
+            0x1_0000,
+            0x7fff_ffff,
+            0x1234_5678,
+            0x7fff_0000,
+        ] {
+            for other in [false, true] {
+                let r = PrimRef::new(&b, id, other);
+                assert_eq!((r.id(), r.other(), r.is_skipped()), (id, other, false));
+                assert_eq!((r.lo.truncate(), r.hi.truncate()), (b.min, b.max));
+                for w in [r.lo.w, r.hi.w] {
+                    assert!(w == 0.0 || w.is_normal(), "{id:#x}: {w}");
+                }
+            }
+        }
+        assert!(PrimRef::skipped().is_skipped());
     }
 
     /// The plan's bin plane is the cheapest of all planes on all axes:
@@ -879,14 +955,14 @@ mod tests {
             };
             let map = BinMap::new(&rg.cbounds);
             let bin = |p: &PrimRef| {
-                let c = Vec3A::from(p.centroid());
+                let c = p.centroid();
                 if bins == SMALL_BINS {
                     map.bins::<SMALL_BINS>(c)[axis]
                 } else {
                     map.bins::<BINS>(c)[axis]
                 }
             };
-            let mut before: Vec<u32> = items.iter().map(|p| p.id).collect();
+            let mut before: Vec<u32> = items.iter().map(|p| p.id()).collect();
             let (left, right) = b.divide(&mut items, &rg, plan);
             assert_eq!((left.begin, left.end, right.end), (0, right.begin, n));
             assert!(items[..left.end].iter().all(|p| bin(p) < pos));
@@ -896,7 +972,7 @@ mod tests {
                 bounds_of(&items[right.begin..]),
                 (right.bounds, right.cbounds)
             );
-            let mut after: Vec<u32> = items.iter().map(|p| p.id).collect();
+            let mut after: Vec<u32> = items.iter().map(|p| p.id()).collect();
             before.sort_unstable();
             after.sort_unstable();
             assert_eq!(before, after);
@@ -991,7 +1067,7 @@ mod tests {
                 let plan = b.plan(&items, &rg, 12);
                 let mut out = Vec::new();
                 b.subtree(&mut items, rg, plan, 12, &mut out);
-                let ids: Vec<u32> = items.iter().map(|p| p.id).collect();
+                let ids: Vec<u32> = items.iter().map(|p| p.id()).collect();
                 (format!("{out:?}"), ids)
             })
         };
@@ -1008,7 +1084,7 @@ mod tests {
             let items = boxes((0..n).map(|_| r.v(0.0, 1.0)), Vec3::splat(0.01));
             for cut in [-1.0, 0.3, 0.5, 2.0] {
                 let mut v = items.clone();
-                let (k, lb, rb) = partition(&mut v, |p| p.centroid().x < cut);
+                let (k, lb, rb) = partition(&mut v, |c| c.x < cut);
                 assert_eq!(k, items.iter().filter(|p| p.centroid().x < cut).count());
                 assert!(v[..k].iter().all(|p| p.centroid().x < cut));
                 assert!(v[k..].iter().all(|p| p.centroid().x >= cut));
@@ -1027,8 +1103,8 @@ mod tests {
         let items = refs(n, 7);
         let (mut b, mut cb) = (Aabb::EMPTY, Aabb::EMPTY);
         for p in &items {
-            b = b.union(&Aabb::new(p.lo, p.hi));
-            cb = cb.grow(p.centroid());
+            b = b.union(&Aabb::new(p.lo.truncate(), p.hi.truncate()));
+            cb = cb.grow(p.centroid().into());
         }
         assert_eq!(bounds_of(&items), (b, cb));
         let map = BinMap::new(&cb);
