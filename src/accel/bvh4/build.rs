@@ -169,8 +169,12 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
             Item::Skip => PrimRef::skipped(),
         }
     }));
-    refs.retain(|r| !r.is_skipped());
-    let (bounds, cbounds) = bounds_of(&refs);
+    // One pass for the bounds, which also finds any item left out (rare:
+    // then a second pass drops them).
+    let (bounds, cbounds, skipped) = root_bounds(&refs);
+    if skipped {
+        refs.retain(|r| !r.is_skipped());
+    }
     if refs.is_empty() {
         return Built {
             nodes: Vec::new(),
@@ -242,6 +246,31 @@ fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
         || (Aabb::EMPTY, Aabb::EMPTY),
         |a, b| (a.0.union(&b.0), a.1.union(&b.1)),
     )
+}
+
+/// Bounds and centroid bounds of the items not left out, and whether any
+/// was.
+fn root_bounds(refs: &[PrimRef]) -> (Aabb, Aabb, bool) {
+    let one = |r: &[PrimRef]| {
+        let (mut acc, mut skipped) = (Acc::new(), false);
+        for p in r {
+            if p.is_skipped() {
+                skipped = true;
+            } else {
+                acc.add(p.lo(), p.hi(), p.centroid());
+            }
+        }
+        (acc, skipped)
+    };
+    let (acc, skipped) = if refs.len() < PARALLEL_BINNING {
+        one(refs)
+    } else {
+        refs.par_chunks(8192)
+            .map(one)
+            .reduce(|| (Acc::new(), false), |a, b| (a.0.union(&b.0), a.1 | b.1))
+    };
+    let (b, c) = acc.boxes();
+    (b, c, skipped)
 }
 
 /// Blocks of four a leaf of `n` items needs: the SAH counts blocks, not
@@ -365,29 +394,25 @@ const SMALL_BINS: usize = 8;
 /// See [`SMALL_BINS`].
 const SMALL_RANGE: usize = 64;
 
-/// Bins of a small range, on this thread.
-fn small_bins(items: &[PrimRef], cb: &Aabb) -> Bins<SMALL_BINS> {
-    let mut b = Bins::new();
+/// The cheapest plane over `B` bins (see [`sweep`]), binned on this
+/// thread: the bins stay in this frame (returning them was a copy of up to
+/// 3.4 KB per node).
+fn serial_sweep<const B: usize>(items: &[PrimRef], cb: &Aabb, ce: Vec3) -> (f32, usize, usize) {
+    let mut b = Bins::<B>::new();
     b.add(items, &BinMap::new(cb));
-    b
+    sweep(&b, items.len(), ce)
 }
 
-/// Bins of a large range, in parallel when it is very large.
+/// Bins of a very large range, binned in parallel.
 fn large_bins(items: &[PrimRef], cb: &Aabb) -> Bins<BINS> {
     let map = BinMap::new(cb);
-    if items.len() >= PARALLEL_BINNING {
-        items
-            .par_chunks(16 * 1024)
-            .fold(Bins::new, |mut b, c| {
-                b.add(c, &map);
-                b
-            })
-            .reduce(Bins::new, Bins::merge)
-    } else {
-        let mut b = Bins::new();
-        b.add(items, &map);
-        b
-    }
+    items
+        .par_chunks(16 * 1024)
+        .fold(Bins::new, |mut b, c| {
+            b.add(c, &map);
+            b
+        })
+        .reduce(Bins::new, Bins::merge)
 }
 
 /// The cheapest plane: `(cost, axis, first bin on the right)`; the cost is
@@ -468,7 +493,9 @@ impl Builder {
             return Some(Plan::Median { axis });
         }
         let best = if n < SMALL_RANGE {
-            sweep(&small_bins(items, &r.cbounds), n, ce)
+            serial_sweep::<SMALL_BINS>(items, &r.cbounds, ce)
+        } else if n < PARALLEL_BINNING {
+            serial_sweep::<BINS>(items, &r.cbounds, ce)
         } else {
             sweep(&large_bins(items, &r.cbounds), n, ce)
         };
@@ -552,14 +579,15 @@ impl Builder {
             return leaf(r.begin, r.len());
         };
         // Up to W children: split the largest child that wants splitting.
-        let mut kids: Vec<(Range, Option<Plan>)> = Vec::with_capacity(W);
+        // (On the stack: a vector here was an allocation per node.)
+        let mut all = [(r, None); W];
         let (a, b) = self.divide(refs_of(refs, &r, &r), &r, plan);
         let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
         let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
-        kids.push((a, pa));
-        kids.push((b, pb));
-        while kids.len() < W {
-            let pick = kids
+        (all[0], all[1]) = ((a, pa), (b, pb));
+        let mut len = 2;
+        while len < W {
+            let pick = all[..len]
                 .iter()
                 .enumerate()
                 .filter(|(_, k)| k.1.is_some())
@@ -571,13 +599,16 @@ impl Builder {
                 })
                 .map(|(i, _)| i);
             let Some(i) = pick else { break };
-            let (k, p) = kids.remove(i);
+            let (k, p) = all[i];
             let (a, b) = self.divide(refs_of(refs, &r, &k), &k, p.expect("filtered"));
             let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
             let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
-            kids.insert(i, (b, pb));
-            kids.insert(i, (a, pa));
+            // `a` and `b` take `k`'s place, in order.
+            all.copy_within(i + 1..len, i + 2);
+            (all[i], all[i + 1]) = ((a, pa), (b, pb));
+            len += 1;
         }
+        let kids = &all[..len];
         let at = out.len();
         out.push(Node::EMPTY);
         let mut node = Node::EMPTY;
@@ -588,7 +619,7 @@ impl Builder {
             let mut slices = Vec::with_capacity(W);
             let mut rest = &mut *refs;
             let mut base = r.begin;
-            for (k, p) in &kids {
+            for (k, p) in kids {
                 let (mine, tail) = rest.split_at_mut(k.end - base);
                 slices.push((&mut mine[k.begin - base..], *k, *p));
                 rest = tail;
@@ -602,7 +633,7 @@ impl Builder {
                     (c, v)
                 })
                 .collect();
-            for (i, ((c, v), (k, _))) in subs.into_iter().zip(&kids).enumerate() {
+            for (i, ((c, v), (k, _))) in subs.into_iter().zip(kids).enumerate() {
                 let shift = out.len() as u32;
                 let c = if is_leaf(c) { c } else { c + shift };
                 out.extend(v.into_iter().map(|mut n| {
@@ -656,6 +687,15 @@ impl Acc {
         self.hi = self.hi.max(hi);
         self.clo = self.clo.min(c);
         self.chi = self.chi.max(c);
+    }
+
+    fn union(&self, o: &Acc) -> Acc {
+        Acc {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+            clo: self.clo.min(o.clo),
+            chi: self.chi.max(o.chi),
+        }
     }
 
     fn boxes(&self) -> (Aabb, Aabb) {
