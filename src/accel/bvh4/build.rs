@@ -32,6 +32,9 @@ pub(crate) trait Source: Sync {
     /// The vertices of item `id`, which [`Source::item`] called a triangle
     /// (filling the leaves: without `item`'s degeneracy check again).
     fn vertices(&self, id: u32) -> [Vec3; 3];
+    /// A hint that `vertices(id)` will be asked for soon (no effect on
+    /// results; by default nothing).
+    fn prefetch(&self, _id: u32) {}
 }
 
 /// Bins per axis of the SAH sweep.
@@ -785,14 +788,28 @@ fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<
     });
     let mut tris = Vec::with_capacity(block_items.len());
     huge_pages(&tris);
+    let items = |(s, k): (u32, u8)| &refs[s as usize..s as usize + k as usize];
     tris.par_extend(
         block_items
             .par_iter()
+            .enumerate()
             .with_min_len(1024)
-            .map(|&(s, k)| block(&refs[s as usize..s as usize + k as usize], src)),
+            .map(|(b, &at)| {
+                // The vertices are a gather from the source: ask for those
+                // of a block further on (misses overlap instead of queueing).
+                if let Some(&ahead) = block_items.get(b + PREFETCH_BLOCKS) {
+                    for r in items(ahead) {
+                        src.prefetch(r.id());
+                    }
+                }
+                block(items(at), src)
+            }),
     );
     tris
 }
+
+/// How many blocks ahead `fill_leaves` asks for vertices.
+const PREFETCH_BLOCKS: usize = 8;
 
 /// One block of up to four items.
 fn block<S: Source>(items: &[PrimRef], src: &S) -> Tri4 {

@@ -108,6 +108,16 @@ impl<V: Copy + Into<Vec3> + Sync> Source for IndexedMesh<'_, V> {
     fn vertices(&self, id: u32) -> [Vec3; 3] {
         self.indices[id as usize].map(|i| self.vertices[i as usize].into())
     }
+    fn prefetch(&self, id: u32) {
+        // The indices are read (a miss waits for nothing but these hints).
+        if let Some(t) = self.indices.get(id as usize) {
+            for &i in t {
+                if let Some(v) = self.vertices.get(i as usize) {
+                    node::prefetch(v);
+                }
+            }
+        }
+    }
 }
 
 impl Fallback for [Primitive] {
