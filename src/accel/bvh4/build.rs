@@ -709,10 +709,53 @@ impl Acc {
     }
 }
 
-/// In-place partition: items for which `left` holds first. Returns their
-/// count and both sides' bounds and centroid bounds, gathered in the same
-/// pass (a second pass over a large range costs as much as the partition).
+/// Ranges of up to this many items (in the cache) whose sides alternate
+/// often are partitioned without a branch per item (see [`partition`]).
+const BLOCK_PARTITION_MAX: usize = 8 * 1024;
+/// The block of [`block_partition`].
+const BLOCK: usize = 64;
+
+/// Partition: items for which `left` holds first. Returns their count and
+/// both sides' bounds and centroid bounds. Two ways to the same sides:
+/// when the first 32 items change sides at least four times (an unordered
+/// mesh, like a scan), a branch per item would often be mispredicted, and
+/// [`block_partition`] has none (the bounds then take a second pass over
+/// the cached range); otherwise (long runs, as in a mesh stored in order,
+/// or a range too large for the cache) the in-place loop gathers the
+/// bounds in the same pass. Measured (build, 1 thread): bunny40k 7-9%
+/// faster, the spheres (stored in order) within 2%.
 fn partition(
+    v: &mut [PrimRef],
+    left: impl Fn(Vec3A) -> bool,
+) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
+    let n = v.len();
+    if (2 * BLOCK..=BLOCK_PARTITION_MAX).contains(&n) && side_changes(&v[..BLOCK / 2], &left) >= 4 {
+        let k = block_partition(v, &left);
+        let acc = |s: &[PrimRef]| {
+            let mut a = Acc::new();
+            for p in s {
+                a.add(p.lo(), p.hi(), p.centroid());
+            }
+            a.boxes()
+        };
+        return (k, acc(&v[..k]), acc(&v[k..]));
+    }
+    fused_partition(v, left)
+}
+
+/// How often consecutive items change sides.
+fn side_changes(v: &[PrimRef], left: &impl Fn(Vec3A) -> bool) -> usize {
+    let sides = v.iter().map(|p| left(p.centroid()));
+    sides
+        .clone()
+        .zip(sides.skip(1))
+        .filter(|(a, b)| a != b)
+        .count()
+}
+
+/// In-place partition with the bounds gathered in the same pass (a second
+/// pass over a large range costs as much as the partition).
+fn fused_partition(
     v: &mut [PrimRef],
     left: impl Fn(Vec3A) -> bool,
 ) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
@@ -750,6 +793,64 @@ fn partition(
         l.add(b.lo(), b.hi(), cb);
         r.add(a.lo(), a.hi(), ca);
         i += 1;
+    }
+}
+
+/// Partition without data-dependent branches in the scan (BlockQuicksort,
+/// Edelkamp and Weiß 2016): the offsets of the misplaced items of a block
+/// at each end, found by arithmetic, then swapped in pairs. Returns the
+/// count on the left.
+fn block_partition(v: &mut [PrimRef], left: &impl Fn(Vec3A) -> bool) -> usize {
+    // `v[..lb]` go left, `v[re..]` right.
+    let (mut lb, mut re) = (0, v.len());
+    let (mut off_l, mut off_r) = ([0u8; BLOCK], [0u8; BLOCK]);
+    let (mut start_l, mut num_l, mut start_r, mut num_r) = (0, 0, 0, 0);
+    while re - lb >= 2 * BLOCK {
+        if num_l == 0 {
+            start_l = 0;
+            for (k, p) in v[lb..lb + BLOCK].iter().enumerate() {
+                off_l[num_l] = k as u8;
+                num_l += !left(p.centroid()) as usize;
+            }
+        }
+        if num_r == 0 {
+            start_r = 0;
+            for (k, p) in v[re - BLOCK..re].iter().rev().enumerate() {
+                off_r[num_r] = k as u8;
+                num_r += left(p.centroid()) as usize;
+            }
+        }
+        let num = num_l.min(num_r);
+        for t in 0..num {
+            v.swap(
+                lb + off_l[start_l + t] as usize,
+                re - 1 - off_r[start_r + t] as usize,
+            );
+        }
+        (num_l, num_r) = (num_l - num, num_r - num);
+        (start_l, start_r) = (start_l + num, start_r + num);
+        if num_l == 0 {
+            lb += BLOCK;
+        }
+        if num_r == 0 {
+            re -= BLOCK;
+        }
+    }
+    // The rest (fewer than two blocks, one perhaps half done) item by item.
+    let (mut i, mut j) = (lb, re);
+    loop {
+        while i < j && left(v[i].centroid()) {
+            i += 1;
+        }
+        while i < j && !left(v[j - 1].centroid()) {
+            j -= 1;
+        }
+        if i >= j {
+            return i;
+        }
+        v.swap(i, j - 1);
+        i += 1;
+        j -= 1;
     }
 }
 
@@ -1131,21 +1232,54 @@ mod tests {
         assert!(run(1) == run(4), "the parallel path built another tree");
     }
 
-    /// The in-place partition puts the items the predicate holds for first,
-    /// returns their count and both sides' bounds, also when one side is
-    /// empty (every item on one side).
+    /// The partition puts the items the predicate holds for first, keeps
+    /// every item, and returns their count and both sides' bounds, also
+    /// when one side is empty, both for unordered items (from 128 on, the
+    /// switch to `block_partition`) and for items sorted along the cut's
+    /// axis (long runs: the in-place loop throughout), at sizes around the
+    /// block and the switch's limit.
     #[test]
     fn partition_separates_and_bounds_both_sides() {
         let mut r = Rng::new(45);
-        for n in [1, 2, 3, 10, 101] {
-            let items = boxes((0..n).map(|_| r.v(0.0, 1.0)), Vec3::splat(0.01));
-            for cut in [-1.0, 0.3, 0.5, 2.0] {
+        let sizes = [1, 2, 3, 10, 101, 128, 129, 200, 1000, BLOCK_PARTITION_MAX];
+        for n in sizes.into_iter().chain([BLOCK_PARTITION_MAX + 1]) {
+            let mut items = boxes((0..n).map(|_| r.v(0.0, 1.0)), Vec3::splat(0.01));
+            for sorted in [false, true] {
+                if sorted {
+                    items.sort_by(|a, b| a.centroid().x.total_cmp(&b.centroid().x));
+                }
+                for cut in [-1.0, 0.1, 0.3, 0.5, 0.9, 2.0] {
+                    let mut v = items.clone();
+                    let (k, lb, rb) = partition(&mut v, |c| c.x < cut);
+                    assert_eq!(k, items.iter().filter(|p| p.centroid().x < cut).count());
+                    assert!(v[..k].iter().all(|p| p.centroid().x < cut));
+                    assert!(v[k..].iter().all(|p| p.centroid().x >= cut));
+                    assert_eq!((lb, rb), (bounds_of(&v[..k]), bounds_of(&v[k..])));
+                    let mut ids: Vec<u32> = v.iter().map(|p| p.id()).collect();
+                    ids.sort_unstable();
+                    assert!(ids.iter().copied().eq(0..n as u32), "n {n}: items lost");
+                }
+            }
+        }
+    }
+
+    /// The block partition alone: every size from 0 to a few blocks and
+    /// beyond, any share of items on the left, returns the count on the
+    /// left with those items first and keeps every item.
+    #[test]
+    fn block_partition_separates_at_any_size_and_share() {
+        let mut r = Rng::new(46);
+        for n in (0..=3 * BLOCK + 2).chain([5 * BLOCK, 777]) {
+            let items = boxes((0..n).map(|_| r.v(0.0, 1.0)), Vec3::ZERO);
+            for cut in [0.0, 0.05, 0.5, 0.95, 1.0] {
                 let mut v = items.clone();
-                let (k, lb, rb) = partition(&mut v, |c| c.x < cut);
+                let k = block_partition(&mut v, &|c: Vec3A| c.x < cut);
                 assert_eq!(k, items.iter().filter(|p| p.centroid().x < cut).count());
                 assert!(v[..k].iter().all(|p| p.centroid().x < cut));
                 assert!(v[k..].iter().all(|p| p.centroid().x >= cut));
-                assert_eq!((lb, rb), (bounds_of(&v[..k]), bounds_of(&v[k..])));
+                let mut ids: Vec<u32> = v.iter().map(|p| p.id()).collect();
+                ids.sort_unstable();
+                assert!(ids.iter().copied().eq(0..n as u32), "n {n} cut {cut}");
             }
         }
     }
