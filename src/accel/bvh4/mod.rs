@@ -7,7 +7,8 @@
 //!   256 bytes; `Tri4`: four triangles' vertices, 160 bytes) and prefetch;
 //!   `lanes.rs`: the eight-lane arithmetic of the box test.
 //! - `build.rs`: binned SAH (32 bins, costs counted in blocks of four),
-//!   children built in parallel above 16k items, leaves filled last.
+//!   children built in parallel above 16k items, a branch-free partition
+//!   for unordered ranges, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
 //!   nearest-child-first closest hit, unordered any hit with early exit.
 //! - `dispatch.rs`: the traversal compiled for SSE2 and for AVX2 with FMA, picked at
@@ -362,6 +363,13 @@ mod tests {
         }
         let b = Bvh4::new(&prims, all(&prims));
         assert!(b.bounds().is_finite());
+        // The blocks hold every other item once (spheres flagged), and
+        // nothing else.
+        let mut ids: Vec<u32> = b.tris.iter().flat_map(|t| t.ids).collect();
+        ids.retain(|&id| id != node::NO_ITEM);
+        ids.iter_mut().for_each(|id| *id &= !node::OTHER);
+        ids.sort_unstable();
+        assert!(ids.iter().copied().eq(0..prims.len() as u32 - 4), "{ids:?}");
         assert_agrees(&b, &prims, 3000);
     }
 
