@@ -413,7 +413,9 @@ mod tests {
     /// Build quality, which no agreement test can see (any tree gives
     /// the right hits): the SAH cost of the tree and the nodes and
     /// triangles a fixed set of rays visits stay within 3% of the values
-    /// measured when this test was written (session 8), either way. A
+    /// measured when this test was written (session 8; measured again in
+    /// session 16, when the split cost went from 0.5 to 1.0 and leaves
+    /// from 8 to 16 items: fewer nodes, more triangle tests), either way. A
     /// build that splits worse (a wrong bin, a wrong cost, a wrong axis)
     /// exceeds them; a counter that stops counting falls below; a better
     /// build should lower the numbers here.
@@ -421,8 +423,8 @@ mod tests {
     fn build_quality_stays_where_it_was_measured() {
         // (mesh, and its measured SAH cost, nodes and tests a ray pair)
         for (name, prims, cost_max, nodes_max, tests_max) in [
-            ("soup", soup(5, 3000), 34.792, 17.50, 42.48),
-            ("terrain", terrain(), 7.701, 9.73, 10.84),
+            ("soup", soup(5, 3000), 36.477, 12.12, 69.19),
+            ("terrain", terrain(), 8.592, 9.70, 15.19),
         ] {
             let b = Bvh4::new(&prims, all(&prims));
             let cost = sah_cost(&b);
