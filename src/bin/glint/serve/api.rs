@@ -66,10 +66,7 @@ fn no_scene(app: &App) -> ApiError {
 type Setup = (HashMap<String, String>, u64, Arc<Scene>, View);
 
 /// The query, the last good scene, and the view the query asks for.
-fn setup(
-    app: &App,
-    q: Vec<(String, String)>,
-) -> Result<Setup, ApiError> {
+fn setup(app: &App, q: Vec<(String, String)>) -> Result<Setup, ApiError> {
     let q = params::query_map(q)?;
     let (version, scene) = app.scene().ok_or_else(|| no_scene(app))?;
     let view = params::view(&q, &app.defaults_parsed, &scene.camera)?;

@@ -30,6 +30,8 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Duration;
 
+/// The port `glint serve` listens on unless told otherwise.
+pub const DEFAULT_PORT: u16 = 8837;
 /// Largest request body accepted (every endpoint is a GET: none needs one).
 pub const MAX_BODY: u64 = 4096;
 /// How often the scene file and its meshes are looked at for changes.
@@ -45,7 +47,7 @@ pub struct ServeArgs {
     /// Scene file (MIT 6.837 format).
     pub scene: PathBuf,
     /// Port on 127.0.0.1 (0: any free port; the address is printed).
-    #[arg(long, default_value_t = 8837)]
+    #[arg(long, default_value_t = DEFAULT_PORT)]
     pub port: u16,
     /// Folder every file the scene reads must be inside (default: the scene's folder).
     #[arg(long, value_name = "DIR")]
@@ -84,7 +86,7 @@ pub fn run(a: ServeArgs) -> ExitCode {
         spp: a.spp,
         accel: a.accel.clone(),
     };
-    match serve(&a.scene, a.root.as_deref(), a.port, defaults, "glint") {
+    match serve(&a.scene, a.root.as_deref(), Some(a.port), defaults, "glint") {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
             eprintln!("glint: {}", glint::limits::bounded_message(&msg));
@@ -109,10 +111,11 @@ fn check_defaults(d: &Defaults) -> Result<(), String> {
 
 /// Serves `scene` until Ctrl-C (or SIGTERM); `program` names the command
 /// in messages. The address is printed on stdout as soon as it listens.
+/// Without a `port`, [`DEFAULT_PORT`] if it is free, else any free port.
 pub fn serve(
     scene: &Path,
     root: Option<&Path>,
-    port: u16,
+    port: Option<u16>,
     defaults: Defaults,
     program: &'static str,
 ) -> Result<(), String> {
@@ -145,10 +148,16 @@ pub fn serve(
         .build()
         .map_err(|e| format!("could not start the server's threads: {e}"))?;
     rt.block_on(async move {
-        let addr = SocketAddr::from((Ipv4Addr::LOCALHOST, port));
-        let listener = tokio::net::TcpListener::bind(addr)
-            .await
-            .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+        let addr = SocketAddr::from((Ipv4Addr::LOCALHOST, port.unwrap_or(DEFAULT_PORT)));
+        let listener = match tokio::net::TcpListener::bind(addr).await {
+            Ok(l) => l,
+            Err(_) if port.is_none() => {
+                tokio::net::TcpListener::bind(SocketAddr::from((Ipv4Addr::LOCALHOST, 0)))
+                    .await
+                    .map_err(|e| format!("cannot listen on 127.0.0.1: {e}"))?
+            }
+            Err(e) => return Err(format!("cannot listen on {addr}: {e}")),
+        };
         let local = listener.local_addr().map_err(|e| e.to_string())?;
         println!(
             "{program} serve: http://{local}/  ({})",

@@ -498,7 +498,7 @@ function draw3d() {
   const apex = cam.eye;
   const corners = [[-1, -1], [1, -1], [1, 1], [-1, 1]].map(([sx, sy]) =>
     v3.add(v3.add(v3.add(apex, v3.mul(f, dist)), v3.mul(right, sx * hx)), v3.mul(up, sy * hy)));
-  g.strokeStyle = 'rgb(230,200,60)'; g.lineWidth = 1;
+  g.strokeStyle = 'rgb(255,150,40)'; g.lineWidth = 1;
   g.beginPath();
   for (let i = 0; i < 4; i++) {
     stroke(cam.kind === 'perspective' ? apex : v3.sub(corners[i], v3.mul(f, dist)), corners[i]);
