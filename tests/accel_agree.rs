@@ -588,14 +588,14 @@ fn bvh_sah() {
 }
 
 #[test]
-fn bvh4() {
-    let (a, b) = check(AccelKind::Bvh4, true);
+fn bvh8() {
+    let (a, b) = check(AccelKind::Bvh8, true);
     assert!(a.intersection_tests < b.intersection_tests);
 }
 
 #[test]
-fn bvh4_unflattened() {
-    check(AccelKind::Bvh4, false);
+fn bvh8_unflattened() {
+    check(AccelKind::Bvh8, false);
 }
 
 #[test]
@@ -699,7 +699,7 @@ fn cost_report() {
             AccelKind::OctreeInner,
             AccelKind::NESTED_GRID,
             AccelKind::BvhHierarchy,
-            AccelKind::Bvh4,
+            AccelKind::Bvh8,
         ];
         let mut rq = Rng::new(5);
         let probe = World::build(&sc, BuildOptions::default());
@@ -838,7 +838,7 @@ fn moving_objects_and_timed_rays() {
         AccelKind::Bvh(Split::Sah),
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
-        AccelKind::Bvh4,
+        AccelKind::Bvh8,
         AccelKind::BvhHierarchy,
         AccelKind::OctreeInner,
         AccelKind::NestedGrid {

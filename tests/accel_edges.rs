@@ -46,7 +46,7 @@ fn accelerators() -> Vec<AccelKind> {
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
         AccelKind::BvhHierarchy,
-        AccelKind::Bvh4,
+        AccelKind::Bvh8,
     ]
 }
 

@@ -127,7 +127,7 @@ fn rays_through_edges_and_vertices_never_miss() {
         },
         AccelKind::Octree,
         AccelKind::Bvh(Split::Sah),
-        AccelKind::Bvh4,
+        AccelKind::Bvh8,
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
     ];

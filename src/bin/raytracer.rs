@@ -55,7 +55,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-accel",
         "NAME",
-        "bvh4 (the fast default), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
+        "bvh8 (the fast default; bvh4 is an alias), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
     ),
     (
         "-no_flatten",

@@ -72,7 +72,7 @@ impl Structure {
             }
             // The fast BVH records no walk (its loops are kept free of
             // observers); its teaching twin, the binary SAH BVH, is shown.
-            AccelKind::Bvh4 => {
+            AccelKind::Bvh8 => {
                 Structure::Bvh(Bvh::new(&world.prims, ids, crate::accel::Split::Sah))
             }
         })

@@ -46,7 +46,7 @@ const ACCELS: [AccelKind; 10] = [
     AccelKind::Bvh(Split::Median),
     AccelKind::Bvh(Split::Sah),
     AccelKind::BvhHierarchy,
-    AccelKind::Bvh4,
+    AccelKind::Bvh8,
 ];
 
 /// One scene to bench, flattened or not (`--no-flatten` rows show what the

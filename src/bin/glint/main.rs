@@ -156,8 +156,8 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: bvh4 (the fast default), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
-    #[arg(long, default_value = "bvh4")]
+    /// Accelerator: bvh8 (the fast default; bvh4 is an alias), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
+    #[arg(long, default_value = "bvh8")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
