@@ -24,26 +24,26 @@ use glint::render::{
     render_image, CameraModel, Control, PixelOffset, Sampler, SamplerKind, Settings,
 };
 use glint::scene::{
-    AreaShape, Background, Camera, Effects, Lens, Light, Material, Node, Phong, Scene, Shape,
+    AreaShape, Background, Camera, Effects, Lens, Light, Material, Node, Phong, Scene, ShapeDesc,
 };
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
-fn shape(shape: Shape, material: usize) -> Node {
+fn shape(shape: ShapeDesc, material: usize) -> Node {
     Node::Shape {
         shape,
         material: Some(material),
     }
 }
 
-fn plane(normal: Vec3, offset: f32) -> Shape {
-    Shape::Plane { normal, offset }
+fn plane(normal: Vec3, offset: f32) -> ShapeDesc {
+    ShapeDesc::Plane { normal, offset }
 }
 
-fn sphere(center: Vec3, radius: f32) -> Shape {
-    Shape::Sphere { center, radius }
+fn sphere(center: Vec3, radius: f32) -> ShapeDesc {
+    ShapeDesc::Sphere { center, radius }
 }
 
 fn white() -> Material {
@@ -104,8 +104,8 @@ fn penumbra_scene() -> Scene {
     );
     let root = Node::Group(vec![
         shape(plane(Vec3::Y, 0.0), 0),
-        shape(Shape::Triangle([a, b, c]), 0),
-        shape(Shape::Triangle([a, c, d]), 0),
+        shape(ShapeDesc::Triangle([a, b, c]), 0),
+        shape(ShapeDesc::Triangle([a, c, d]), 0),
     ]);
     scene(look_down(), vec![light], vec![white()], root)
 }

@@ -19,7 +19,7 @@ use crate::accel::{
     Storage,
 };
 use crate::math::Vec3;
-use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
+use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, ShapeDesc as Desc};
 use crate::shape::{Moving, Plane, Shape, Sphere, Transformed, Triangle};
 use glam::{DMat4, DVec3};
 use std::time::Instant;
