@@ -20,9 +20,8 @@
 use glint::integrator::{AmbientOcclusion, AoSettings, Integrator, NoObserver, RayKind, Whitted};
 use glint::light::{is_delta, sample_light};
 use glint::math::{Keyframe, Motion, Ray, Vec2, Vec3};
-use glint::render::{
-    render_image, CameraModel, Control, PixelOffset, Sampler, SamplerKind, Settings,
-};
+use glint::render::{render_image, CameraModel, Control, PixelOffset, Settings};
+use glint::sampler::{Sampler, SamplerKind};
 use glint::scene::{
     AreaShape, Background, Camera, Effects, Lens, Light, Material, Node, Phong, Scene, ShapeDesc,
 };
@@ -131,7 +130,7 @@ fn lambert(p: Vec3, x0: f32, x1: f32) -> f64 {
 }
 
 /// A one-sample Sobol stream past the pixel position.
-fn stream_of(sampler: &Sampler, k: u32) -> glint::render::SampleStream<'_> {
+fn stream_of(sampler: &Sampler, k: u32) -> glint::sampler::SampleStream<'_> {
     let mut s = sampler.stream((3, 7), k);
     s.next_2d();
     s

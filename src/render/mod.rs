@@ -12,8 +12,7 @@ mod frame;
 pub mod legacy;
 pub mod views;
 
-pub use crate::sampler;
-pub use crate::sampler::{GridLayout, SampleStream, Sampler, SamplerKind};
+use crate::sampler::{SampleStream, Sampler};
 pub use adaptive::Adaptive;
 pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use filter::Filter;

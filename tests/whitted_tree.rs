@@ -1,5 +1,7 @@
-//! Properties of the Whitted ray tree on hand-built and shared scenes:
-//! no self-intersection acne, the bounce and weight limits, shadows.
+//! Properties of the Whitted ray tree (the library's `Whitted`) on hand-built
+//! and shared scenes: no self-intersection acne, the bounce and weight
+//! limits, shadows, glossy spreads. `raytree_cli.rs` tests the `glint
+//! raytree` command.
 
 use crate::common;
 use glint::format::load_scene;
