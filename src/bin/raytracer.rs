@@ -135,7 +135,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gaussian_filter",
         "SIGMA",
-        "Gaussian reconstruction filter",
+        "Gaussian reconstruction filter over the whole support square of ceil(2 SIGMA - 0.5) pixels (the course's kernel, not cut at 2 SIGMA)",
     ),
     (
         "-render_samples",
@@ -324,7 +324,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 let f = match flag.as_str() {
                     "-box_filter" => Filter::Box(v),
                     "-tent_filter" => Filter::Tent(v),
-                    _ => Filter::Gaussian(v),
+                    // The course implementations' square kernel (render/filter.rs).
+                    _ => Filter::GaussianSquare(v),
                 };
                 f.validate().map_err(|e| format!("{flag}: {e}"))?;
                 job.filter = f;
@@ -504,7 +505,7 @@ mod tests {
         .unwrap();
         let s = j.sampler.unwrap();
         assert_eq!((s.kind, s.spp()), (SamplerKind::Jittered, 9));
-        assert_eq!(j.filter, Filter::Gaussian(0.4));
+        assert_eq!(j.filter, Filter::GaussianSquare(0.4));
         assert_eq!(j.samples_view, Some((PathBuf::from("s.tga"), 20)));
         let (j, _) = parse(&args("-input a.txt -uniform_samples 4")).unwrap();
         assert_eq!(

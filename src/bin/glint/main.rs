@@ -187,7 +187,7 @@ struct RenderArgs {
     /// Seed of the random samplers (changes the noise, not its statistics).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma).
+    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma, a round kernel; `raytracer -gaussian_filter` keeps the course's square kernel, also gaussian-square:SIGMA).
     #[arg(long, default_value = "box:0.5")]
     filter: Filter,
     /// Whitted's adaptive supersampling: split a pixel square where its corners differ by more than this (0..1).
