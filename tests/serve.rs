@@ -632,6 +632,35 @@ fn raytracer_gui_starts_the_server() {
     );
 }
 
+/// The handouts' lines (`-output` and `-gui`) run from a script still
+/// render their image and end: the browser view starts only at a terminal.
+#[test]
+fn raytracer_gui_with_output_in_a_script_renders_and_ends() {
+    let d = scratch("gui-output");
+    let scene = common::own_scene("whitted.txt");
+    let out = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args([
+            "-input",
+            scene.to_str().unwrap(),
+            "-size",
+            "40",
+            "30",
+            "-output",
+        ])
+        .arg(d.join("out.png"))
+        .args(["-gui", "-tessellation", "10", "5"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(d.join("out.png").exists());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("-gui: rendering"));
+}
+
 /// The page in a real browser: `tests/browser/test_serve_page.py`, run by
 /// pytest with Playwright driving Debian's chromium. Skipped (with a note)
 /// where chromium, Playwright, pytest or Pillow are missing, unless

@@ -88,7 +88,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gui",
         "",
-        "the course's preview, in a browser: starts `glint serve` on the scene and prints its address",
+        "the course's preview, in a browser: `glint serve` on the scene (after -output's image, at a terminal)",
     ),
     (
         "-tessellation",
@@ -203,14 +203,32 @@ fn real_main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    if args.iter().any(|a| a == "-gui") {
+    // `-gui` without `-output`: the browser view alone. With `-output` (every
+    // handout line), the image is rendered first, as the course's program
+    // did, and the view follows only for a person at a terminal, so that
+    // scripts running the handouts' lines verbatim still end.
+    let gui_asked = args.iter().any(|a| a == "-gui");
+    if gui_asked && job.output.is_none() {
         return gui(&job);
     }
-    job.cancel = Some(glint::job::interrupt_flag());
+    let interactive = std::io::stdin().is_terminal();
+    if gui_asked && !interactive {
+        eprintln!(
+            "raytracer: -gui: rendering {} only (the browser view starts from a terminal, or without -output)",
+            job.output.as_deref().unwrap_or(std::path::Path::new("")).display()
+        );
+    }
+    if !(gui_asked && interactive) {
+        // The server installs its own Ctrl-C handling.
+        job.cancel = Some(glint::job::interrupt_flag());
+    }
     match job.run() {
         Ok(report) => {
             if stats {
                 print!("{}", glint::job::course_stats_text(&report));
+            }
+            if gui_asked && interactive {
+                return gui(&job);
             }
             ExitCode::SUCCESS
         }

@@ -103,7 +103,6 @@ def test_page_loads(page):
 def test_image_refines(page, scene_dir, tmp_path):
     # Start over and catch an early pass.
     page.select_option("select[name=spp]", "64")
-    page.evaluate("() => { glint.spp = 0; }")
     page.check("input[name=shade_back]")
     page.wait_for_function("glint.spp >= 1 && glint.spp < 64", timeout=60000, polling=5)
     early_spp, early = canvas_now(page)
@@ -203,8 +202,8 @@ def test_edited_scene_rerenders(page, scene_dir):
     text = scene.read_text()
     assert "color 0.35 0.55 0.85" in text
     scene.write_text(text.replace("color 0.35 0.55 0.85", "color 0.9 0.2 0.1"))
-    page.wait_for_function(f"glint.version > {v0} && glint.spp >= 1", timeout=60000)
-    page.wait_for_function("glint.spp >= 2", timeout=60000)
+    # An image of the new version, two passes into its refinement.
+    page.wait_for_function(f"glint.imageVersion > {v0} && glint.spp >= 2", timeout=60000)
     _, after = canvas_now(page)
     # The top row is sky: blue before, red after.
     r0, g0, b0 = before.getpixel((SIZE[0] // 2, 0))

@@ -21,7 +21,7 @@ const S = {
   tree: null, treeOverlay: null,
   walk: null, grid: null,
   spp: 0, target: 0, passes: 0, done: false, rendering: false,
-  renders: 0, started: false,
+  renders: 0, started: false, imageVersion: -1,
 };
 window.glint = S;
 
@@ -81,7 +81,7 @@ function setOption(sel, value) {
 async function refine() {
   const gen = ++S.gen;
   const q = params().toString();
-  S.rendering = true; S.done = false;
+  S.rendering = true; S.done = false; S.spp = 0;
   let pass = 0;
   pollProgress(gen);
   while (gen === S.gen) {
@@ -107,6 +107,7 @@ async function refine() {
     S.spp = +r.headers.get('x-glint-spp');
     S.target = +r.headers.get('x-glint-target');
     S.passes = +r.headers.get('x-glint-pass');
+    S.imageVersion = +r.headers.get('x-glint-version');
     S.renders++;
     pass = S.passes;
     status('');
