@@ -5,28 +5,7 @@
 //! receives.
 
 use super::*;
-use crate::math::testing::Lcg;
-use glam::DVec3;
-use std::f64::consts::PI;
-
-/// Midpoint quadrature over the sphere on an equal-area grid (`z` and `φ`
-/// uniform): `∫ g(ω) dω ≈ Σ g · 4π/N`, per channel. With 600 × 1200 cells
-/// (each about 0.006 rad across; thin wedges at the poles) a lobe of
-/// exponent up to 40 is integrated to better than 2e-3 wherever it points.
-fn sphere_integral(mut g: impl FnMut(Vec3) -> Vec3) -> DVec3 {
-    let (nz, nphi) = (600, 1200);
-    let mut sum = DVec3::ZERO;
-    for i in 0..nz {
-        let z = -1.0 + 2.0 * (i as f64 + 0.5) / nz as f64;
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        for j in 0..nphi {
-            let phi = 2.0 * PI * (j as f64 + 0.5) / nphi as f64;
-            let w = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
-            sum += g(w).as_dvec3();
-        }
-    }
-    sum * 4.0 * PI / (nz * nphi) as f64
-}
+use crate::math::testing::{sphere_integral, Lcg};
 
 /// Stratified values of `(uc, u)`: `k` strata per dimension.
 fn grid(k: usize) -> impl Iterator<Item = (f32, Vec2)> {

@@ -38,14 +38,8 @@ pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
             edge1,
             edge2,
         } => {
-            let n = edge1.cross(edge2);
-            let area = n.length();
-            let (a, b) = (u.x * edge1, u.y * edge2);
-            let y = corner + a + b;
-            // Two products and two sums per coordinate.
-            let error = gamma(4) * (corner.abs() + a.abs() + b.abs());
-            let n = n / area.max(f32::MIN_POSITIVE);
-            from_area_point(p, SurfacePoint { p: y, error, n }, area, radiance)
+            let (at, area) = quad_point(corner, edge1, edge2, u);
+            from_area_point(p, at, area, radiance)
         }
         AreaShape::Disk {
             center,
@@ -53,35 +47,73 @@ pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
             radius,
         } => {
             let n = normal.normalize_or_zero();
-            let (t1, t2) = n.any_orthonormal_pair();
-            let d = concentric_disk(u) * radius;
-            let (a, b) = (d.x * t1, d.y * t2);
-            let y = center + a + b;
-            // Off the disk's plane only by the rounding of the in-plane
-            // offsets (`t1`, `t2` are unit within a few ulps) and the sums.
-            let error = gamma(6) * (center.abs() + a.abs() + b.abs());
-            from_area_point(
-                p,
-                SurfacePoint { p: y, error, n },
-                PI * radius * radius,
-                radiance,
-            )
+            let at = disk_point(center, n, radius, u);
+            from_area_point(p, at, PI * radius * radius, radiance)
         }
-        AreaShape::Sphere { center, radius } => sample_sphere(center, radius, radiance, p, u),
+        AreaShape::Sphere { center, radius } => match sphere_cone(center, radius, p, u) {
+            None => Incident::NONE, // inside the light: it lights nothing here
+            Some(cone) => {
+                let solid_angle = TAU * (1.0 - cone.cos_max);
+                Incident {
+                    to_light: cone.w,
+                    color: radiance * solid_angle,
+                    at: Some(cone.at),
+                }
+            }
+        },
     }
 }
 
-fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Incident {
-    let (y, n) = (at.p, at.n);
-    let d = y - p;
+/// The point of the parallelogram `corner + s·edge1 + t·edge2` at
+/// `(s, t) = u`, with its error bound and unit normal `edge1 × edge2`, and
+/// the parallelogram's (one-sided) area.
+#[inline]
+pub(super) fn quad_point(corner: Vec3, edge1: Vec3, edge2: Vec3, u: Vec2) -> (SurfacePoint, f32) {
+    let n = edge1.cross(edge2);
+    let area = n.length();
+    let (a, b) = (u.x * edge1, u.y * edge2);
+    let y = corner + a + b;
+    // Two products and two sums per coordinate.
+    let error = gamma(4) * (corner.abs() + a.abs() + b.abs());
+    let n = n / area.max(f32::MIN_POSITIVE);
+    (SurfacePoint { p: y, error, n }, area)
+}
+
+/// The point of the disk around `center` with unit normal `n` chosen by
+/// `u` (uniform over its area), with its error bound.
+#[inline]
+pub(super) fn disk_point(center: Vec3, n: Vec3, radius: f32, u: Vec2) -> SurfacePoint {
+    let (t1, t2) = n.any_orthonormal_pair();
+    let d = concentric_disk(u) * radius;
+    let (a, b) = (d.x * t1, d.y * t2);
+    let y = center + a + b;
+    // Off the disk's plane only by the rounding of the in-plane
+    // offsets (`t1`, `t2` are unit within a few ulps) and the sums.
+    let error = gamma(6) * (center.abs() + a.abs() + b.abs());
+    SurfacePoint { p: y, error, n }
+}
+
+/// From `p` towards the light point `at`: the unit direction, the squared
+/// distance and the cosine between the light's normal and the direction
+/// (signed); `None` when the point is `p` itself or too far for f32.
+#[inline]
+pub(super) fn toward(p: Vec3, at: &SurfacePoint) -> Option<(Vec3, f32, f32)> {
+    let d = at.p - p;
     let dist2 = d.length_squared();
     if dist2 == 0.0 || !dist2.is_finite() {
-        return Incident::NONE;
+        return None;
     }
     let dist = dist2.sqrt();
     let w = d / dist;
+    Some((w, dist2, at.n.dot(w)))
+}
+
+fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Incident {
+    let Some((w, dist2, cos)) = toward(p, &at) else {
+        return Incident::NONE;
+    };
     // Both faces emit.
-    let cos_l = n.dot(w).abs();
+    let cos_l = cos.abs();
     Incident {
         to_light: w,
         color: radiance * (cos_l * area / dist2),
@@ -89,17 +121,35 @@ fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Inci
     }
 }
 
-/// Uniform over the cone of directions the sphere subtends: every sample
-/// hits the visible cap, and the density `1 / Ω` is the same for all.
-fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
+/// A direction of the cone a sphere subtends from a point outside it, and
+/// where it meets the sphere.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ConeSample {
+    /// Unit direction from the point.
+    pub w: Vec3,
+    /// The nearest point of the sphere along `w`.
+    pub at: SurfacePoint,
+    /// Cosine of the cone's half-angle.
+    pub cos_max: f32,
+    /// `sin²` of the half-angle, `r²/d²` (exact where `1 − cos_max`
+    /// cancels, for small or far spheres).
+    pub sin2_max: f32,
+}
+
+/// Uniform over the cone of directions the sphere subtends from `p`: every
+/// sample hits the visible cap, and the density `1 / Ω` is the same for
+/// all. `None` when `p` is inside the sphere.
+#[inline]
+pub(super) fn sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> Option<ConeSample> {
     let to_c = c - p;
     let d2 = to_c.length_squared();
     if d2 <= r * r {
-        return Incident::NONE; // inside the light: it lights nothing here
+        return None;
     }
     let d = d2.sqrt();
     let axis = to_c / d;
-    let cos_max = (1.0 - r * r / d2).max(0.0).sqrt();
+    let sin2_max = r * r / d2;
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
     let cos_t = 1.0 - u.x * (1.0 - cos_max);
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
     let phi = TAU * u.y;
@@ -109,7 +159,6 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     let b = w.dot(to_c);
     let disc = (r * r - (d2 - b * b)).max(0.0);
     let t = b - disc.sqrt();
-    let solid_angle = TAU * (1.0 - cos_max);
     // The point re-projected onto the sphere (pbrt bounds its object-space
     // version by `|y|`; here the centre is not at the origin).
     let y = p + w * t;
@@ -120,11 +169,12 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     // the rounding of the sum: bounded by the terms' sizes, not by `|y|`,
     // which is small where the centre and the offset cancel.
     let error = gamma(5) * (c.abs() + rn.abs());
-    Incident {
-        to_light: w,
-        color: radiance * solid_angle,
-        at: Some(SurfacePoint { p: y, error, n }),
-    }
+    Some(ConeSample {
+        w,
+        at: SurfacePoint { p: y, error, n },
+        cos_max,
+        sin2_max,
+    })
 }
 
 #[cfg(test)]
