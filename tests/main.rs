@@ -18,6 +18,7 @@ mod formats;
 mod fuzz_corpus;
 mod hdr_output;
 mod hostile;
+mod layers;
 mod malformed;
 mod moved_scenes;
 mod numerics;
