@@ -5,7 +5,8 @@ use glint::accel::AccelKind;
 use glint::job::Job;
 use glint::limits;
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, GridLayout, PixelOffset, Sampler, SamplerKind};
+use glint::render::{Adaptive, Filter, PixelOffset};
+use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::viz::grid::GridView;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -55,7 +56,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-accel",
         "NAME",
-        "bvh4 (the fast default), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
+        "bvh8 (the fast default; bvh4 is an alias), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
     ),
     (
         "-no_flatten",

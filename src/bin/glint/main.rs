@@ -6,7 +6,8 @@ use glint::format::load_scene;
 use glint::job::Job;
 use glint::limits;
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, Sampler, SamplerKind};
+use glint::render::{Adaptive, Filter};
+use glint::sampler::{Sampler, SamplerKind};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -161,8 +162,8 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: bvh4 (the fast default), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
-    #[arg(long, default_value = "bvh4")]
+    /// Accelerator: bvh8 (the fast default; bvh4 is an alias), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
+    #[arg(long, default_value = "bvh8")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
