@@ -370,3 +370,103 @@ fn slurm_script_and_kubernetes_job_render_mergeable_pieces() {
         .unwrap()
         .contains("cargo build --release --bin glint"));
 }
+
+/// A crop anywhere (one pixel, one tile, across tiles, at every edge and
+/// corner) of an image seven tiles wide and three high renders exactly the
+/// whole render's pixels there and exits 0 without a `.partial` file, with a
+/// filter inside its pixel and with one reaching three pixels out; `--tile`
+/// bands of the same image merge into it bit for bit.
+#[test]
+fn crops_anywhere_on_an_image_many_tiles_wide_are_exact_and_complete() {
+    let dir = scratch("crops");
+    let scene = own_scene("whitted.txt").to_string_lossy().into_owned();
+    let (w, h) = (200usize, 70usize); // 7 x 3 tiles of 32
+    for filter in ["box:0.5", "gaussian:1.5"] {
+        let base = [
+            "render",
+            scene.as_str(),
+            "--size",
+            "200",
+            "70",
+            "--spp",
+            "2",
+            "--sampler",
+            "sobol",
+            "--filter",
+            filter,
+            "--shadows",
+            "--quiet",
+        ];
+        ok(&glint(&[&base[..], &["-o", "full.exr"]].concat(), &dir));
+        let full = glint::output::read_exr_window(&dir.join("full.exr")).unwrap();
+        let crops: [[usize; 4]; 9] = [
+            [100, 35, 101, 36], // one pixel
+            [64, 32, 96, 64],   // exactly one tile
+            [40, 10, 130, 50],  // across tiles
+            [0, 0, 1, 1],       // top-left corner pixel
+            [199, 69, 200, 70], // bottom-right corner pixel
+            [150, 0, 200, 70],  // right edge, full height
+            [0, 60, 200, 70],   // bottom edge, full width
+            [0, 20, 13, 41],    // left edge
+            [31, 31, 33, 33],   // four tiles' corner
+        ];
+        for [x0, y0, x1, y1] in crops {
+            let name = format!("crop-{x0}-{y0}-{x1}-{y1}.exr");
+            let c: Vec<String> = [x0, y0, x1, y1].iter().map(|v| v.to_string()).collect();
+            let out = glint(
+                &[
+                    &base[..],
+                    &["-o", &name, "--crop", &c[0], &c[1], &c[2], &c[3]],
+                ]
+                .concat(),
+                &dir,
+            );
+            assert_eq!(
+                out.status.code(),
+                Some(0),
+                "{filter} crop {c:?}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            assert!(!dir.join(name.replace(".exr", ".partial.exr")).exists());
+            let p = glint::output::read_exr_window(&dir.join(&name)).unwrap();
+            let (cw, ch) = (x1 - x0, y1 - y0);
+            assert_eq!(p.window, (x0 as u32, y0 as u32, cw as u32, ch as u32));
+            for row in 0..ch {
+                for x in 0..cw {
+                    let (a, b) = (p.pixels[row * cw + x], full.pixels[(row + y0) * w + x + x0]);
+                    assert_eq!(
+                        a.to_array().map(f32::to_bits),
+                        b.to_array().map(f32::to_bits),
+                        "{filter} crop {c:?}: pixel ({}, {})",
+                        x + x0,
+                        row + y0
+                    );
+                }
+            }
+        }
+        // --tile bands of the same wide image: each exits 0, and they merge
+        // into the whole render's file.
+        let mut names = Vec::new();
+        for i in 0..5 {
+            let name = format!("band-{i}.exr");
+            let out = glint(
+                &[&base[..], &["-o", &name, "--tile", &format!("{i}/5")]].concat(),
+                &dir,
+            );
+            assert_eq!(out.status.code(), Some(0), "{filter} tile {i}/5");
+            names.push(name);
+        }
+        let args: Vec<&str> = ["merge"]
+            .into_iter()
+            .chain(names.iter().map(String::as_str))
+            .chain(["-o", "bands.exr"])
+            .collect();
+        ok(&glint(&args, &dir));
+        assert_eq!(
+            std::fs::read(dir.join("bands.exr")).unwrap(),
+            std::fs::read(dir.join("full.exr")).unwrap(),
+            "{filter}: bands differ from the whole render"
+        );
+        assert_eq!(h, full.display.1 as usize);
+    }
+}
