@@ -13,6 +13,7 @@ mod accel_agree;
 mod accel_edges;
 mod animation;
 mod cli;
+mod conventions;
 mod distribution;
 mod formats;
 mod fuzz_corpus;
