@@ -14,8 +14,9 @@ use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
     render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
-    Sampler, SamplerKind, Settings, TILE_SIZE,
+    Settings, TILE_SIZE,
 };
+use crate::sampler::{Sampler, SamplerKind};
 use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
 use crate::viz::draw::Canvas;
@@ -709,12 +710,12 @@ impl Job {
         let report = Report {
             scene,
             counters,
-            accel: world.accel.describe(),
-            build_ms: world.build_ms,
+            accel: world.accel().describe(),
+            build_ms: world.build_ms(),
             load_ms,
             world_ms,
             render: render_time,
-            primitives: world.prims.len(),
+            primitives: world.prims().len(),
             bounds: world.bounds(),
             frame,
             settings,

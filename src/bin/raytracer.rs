@@ -5,7 +5,8 @@ use glint::accel::AccelKind;
 use glint::job::Job;
 use glint::limits;
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, GridLayout, PixelOffset, Sampler, SamplerKind};
+use glint::render::{Adaptive, Filter, PixelOffset};
+use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::viz::grid::GridView;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -60,7 +61,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-accel",
         "NAME",
-        "bvh4 (the fast default), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
+        "bvh8 (the fast default; bvh4 is an alias), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
     ),
     (
         "-no_flatten",
@@ -139,7 +140,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gaussian_filter",
         "SIGMA",
-        "Gaussian reconstruction filter",
+        "Gaussian reconstruction filter over the whole support square of ceil(2 SIGMA - 0.5) pixels (the course's kernel, not cut at 2 SIGMA)",
     ),
     (
         "-render_samples",
@@ -352,7 +353,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 let f = match flag.as_str() {
                     "-box_filter" => Filter::Box(v),
                     "-tent_filter" => Filter::Tent(v),
-                    _ => Filter::Gaussian(v),
+                    // The course implementations' square kernel (render/filter.rs).
+                    _ => Filter::GaussianSquare(v),
                 };
                 f.validate().map_err(|e| format!("{flag}: {e}"))?;
                 job.filter = f;
@@ -534,7 +536,7 @@ mod tests {
         .unwrap();
         let s = j.sampler.unwrap();
         assert_eq!((s.kind, s.spp()), (SamplerKind::Jittered, 9));
-        assert_eq!(j.filter, Filter::Gaussian(0.4));
+        assert_eq!(j.filter, Filter::GaussianSquare(0.4));
         assert_eq!(j.samples_view, Some((PathBuf::from("s.tga"), 20)));
         let (j, _) = parse(&args("-input a.txt -uniform_samples 4")).unwrap();
         assert_eq!(
