@@ -31,6 +31,7 @@ mod reintersect;
 mod sampling;
 mod sampling_reference;
 mod scene_props;
+mod serve;
 mod textures;
 mod viz_cost;
 mod viz_grid;

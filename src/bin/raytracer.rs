@@ -12,6 +12,11 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+// The server of `glint serve`, shared: `-gui` starts it.
+#[path = "glint/serve/mod.rs"]
+#[allow(dead_code)]
+mod serve;
+
 fn main() -> ExitCode {
     glint::job::run_guarded("raytracer", real_main)
 }
@@ -83,7 +88,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gui",
         "",
-        "accepted and ignored (the course's OpenGL preview)",
+        "the course's preview, in a browser: starts `glint serve` on the scene and prints its address",
     ),
     (
         "-tessellation",
@@ -198,6 +203,9 @@ fn real_main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if args.iter().any(|a| a == "-gui") {
+        return gui(&job);
+    }
     job.cancel = Some(glint::job::interrupt_flag());
     match job.run() {
         Ok(report) => {
@@ -209,6 +217,27 @@ fn real_main() -> ExitCode {
         Err(e) => {
             eprintln!("raytracer: {}", limits::bounded_message(&e.to_string()));
             ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+/// `-gui`: the course's OpenGL preview becomes `glint serve`'s page, with
+/// the command line's size, bounces, weight, shadows and accelerator.
+fn gui(job: &Job) -> ExitCode {
+    let defaults = serve::params::Defaults {
+        size: (job.width, job.height),
+        bounces: job.integrator.bounces,
+        weight: job.integrator.weight_cutoff,
+        shadows: job.integrator.shadows,
+        shade_back: job.integrator.shade_back,
+        spp: job.sampler.map_or(64, |s| s.spp()),
+        accel: job.build.accel.to_string(),
+    };
+    match serve::serve(&job.input, None, None, defaults, "raytracer") {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("raytracer: {}", limits::bounded_message(&msg));
+            ExitCode::from(2)
         }
     }
 }
@@ -360,7 +389,9 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                     for _ in 0..*n {
                         value("its arguments")?;
                     }
-                    ignored.push(*f);
+                    if *f != "-gui" {
+                        ignored.push(*f);
+                    }
                 }
                 None => {
                     return Err(format!(

@@ -29,6 +29,7 @@ mod bench_rays;
 mod deep;
 mod merge;
 mod raytree;
+mod serve;
 mod structure;
 mod traverse;
 
@@ -85,6 +86,8 @@ enum Command {
     Structure(structure::StructureArgs),
     /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
     Merge(merge::MergeArgs),
+    /// Serve the scene live in a browser on 127.0.0.1: progressive render, click a pixel for its ray tree.
+    Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -279,6 +282,7 @@ fn real_main() -> ExitCode {
         Command::Info { scene } => info(scene),
         Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
+        Command::Serve(a) => serve::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
                 let dir = PathBuf::from("../shared/scenes/6837");
