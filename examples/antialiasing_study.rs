@@ -10,9 +10,9 @@ use glint::integrator::Whitted;
 use glint::math::Vec3;
 use glint::output::write_rgb;
 use glint::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, GridLayout, PixelOffset, Rendered,
-    Sampler, SamplerKind, Settings,
+    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Rendered, Settings,
 };
+use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::world::{BuildOptions, World};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

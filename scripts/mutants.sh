@@ -34,7 +34,7 @@ fi
 # force) and, outside render/, every assignment 7 line (25 s; it checks the
 # samplers, filters and views, all in render/). Accelerators and shapes add
 # the brute-force agreement and watertightness tests.
-common='physics|ray_tree|raytree|reference_images|textures|distribution|sampling|sampling_reference|numerics|reintersect|moved_scenes|viz_cost|viz_grid|viz_traversal|pieces|animation'
+common='physics|whitted_tree|raytree_cli|reference_images|textures|distribution|sampling|sampling_reference|numerics|reintersect|moved_scenes|viz_cost|viz_grid|viz_traversal|pieces|animation'
 # One nextest filterset: the unit tests plus the selected modules of the
 # integration-test binary `suite` (tests/main.rs).
 filter_for() {

@@ -14,8 +14,9 @@ use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
     render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
-    Sampler, SamplerKind, Settings, TILE_SIZE,
+    Settings, TILE_SIZE,
 };
+use crate::sampler::{Sampler, SamplerKind};
 use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
 use crate::viz::draw::Canvas;

@@ -20,30 +20,29 @@
 use glint::integrator::{AmbientOcclusion, AoSettings, Integrator, NoObserver, RayKind, Whitted};
 use glint::light::{is_delta, sample_light};
 use glint::math::{Keyframe, Motion, Ray, Vec2, Vec3};
-use glint::render::{
-    render_image, CameraModel, Control, PixelOffset, Sampler, SamplerKind, Settings,
-};
+use glint::render::{render_image, CameraModel, Control, PixelOffset, Settings};
+use glint::sampler::{Sampler, SamplerKind};
 use glint::scene::{
-    AreaShape, Background, Camera, Effects, Lens, Light, Material, Node, Phong, Scene, Shape,
+    AreaShape, Background, Camera, Effects, Lens, Light, Material, Node, Phong, Scene, ShapeDesc,
 };
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
-fn shape(shape: Shape, material: usize) -> Node {
+fn shape(shape: ShapeDesc, material: usize) -> Node {
     Node::Shape {
         shape,
         material: Some(material),
     }
 }
 
-fn plane(normal: Vec3, offset: f32) -> Shape {
-    Shape::Plane { normal, offset }
+fn plane(normal: Vec3, offset: f32) -> ShapeDesc {
+    ShapeDesc::Plane { normal, offset }
 }
 
-fn sphere(center: Vec3, radius: f32) -> Shape {
-    Shape::Sphere { center, radius }
+fn sphere(center: Vec3, radius: f32) -> ShapeDesc {
+    ShapeDesc::Sphere { center, radius }
 }
 
 fn white() -> Material {
@@ -104,8 +103,8 @@ fn penumbra_scene() -> Scene {
     );
     let root = Node::Group(vec![
         shape(plane(Vec3::Y, 0.0), 0),
-        shape(Shape::Triangle([a, b, c]), 0),
-        shape(Shape::Triangle([a, c, d]), 0),
+        shape(ShapeDesc::Triangle([a, b, c]), 0),
+        shape(ShapeDesc::Triangle([a, c, d]), 0),
     ]);
     scene(look_down(), vec![light], vec![white()], root)
 }
@@ -131,7 +130,7 @@ fn lambert(p: Vec3, x0: f32, x1: f32) -> f64 {
 }
 
 /// A one-sample Sobol stream past the pixel position.
-fn stream_of(sampler: &Sampler, k: u32) -> glint::render::SampleStream<'_> {
+fn stream_of(sampler: &Sampler, k: u32) -> glint::sampler::SampleStream<'_> {
     let mut s = sampler.stream((3, 7), k);
     s.next_2d();
     s

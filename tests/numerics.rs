@@ -12,7 +12,7 @@ use glint::material::TextureSpace;
 use glint::math::{Mat4, Ray, Vec3};
 use glint::render::{render, screen_point, CameraModel, Frame, PixelOffset};
 use glint::scene::{
-    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, Shape, TextureKind,
+    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, ShapeDesc, TextureKind,
 };
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 // ---- scene-building helpers -------------------------------------------------
 
-fn shape(shape: Shape, material: usize) -> Node {
+fn shape(shape: ShapeDesc, material: usize) -> Node {
     Node::Shape {
         shape,
         material: Some(material),
@@ -28,15 +28,15 @@ fn shape(shape: Shape, material: usize) -> Node {
 }
 
 fn sphere(center: Vec3, radius: f32, material: usize) -> Node {
-    shape(Shape::Sphere { center, radius }, material)
+    shape(ShapeDesc::Sphere { center, radius }, material)
 }
 
 fn plane(normal: Vec3, offset: f32, material: usize) -> Node {
-    shape(Shape::Plane { normal, offset }, material)
+    shape(ShapeDesc::Plane { normal, offset }, material)
 }
 
 fn tri(a: Vec3, b: Vec3, c: Vec3, material: usize) -> Node {
-    shape(Shape::Triangle([a, b, c]), material)
+    shape(ShapeDesc::Triangle([a, b, c]), material)
 }
 
 fn xf(matrix: Mat4, child: Node) -> Node {
@@ -176,7 +176,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
                     v(0.0, 1e-30, 0.0),
                     4,
                 ),
-                shape(Shape::Mesh(Arc::new(degenerate_mesh)), 1),
+                shape(ShapeDesc::Mesh(Arc::new(degenerate_mesh)), 1),
                 tri(
                     v(-2.0, -2.0, -1.0),
                     v(2.0, -2.0, -1.0),

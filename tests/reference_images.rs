@@ -342,7 +342,7 @@ fn assignment6_with_every_accelerator() {
         "nested-grid",
         "octree-inner",
         "bvh-hierarchy",
-        "bvh4",
+        "bvh8",
     ] {
         let lines = plain_lines(&data, "A6_cmd.txt")
             .into_iter()

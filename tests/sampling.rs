@@ -10,9 +10,9 @@ use glint::integrator::Whitted;
 use glint::math::Vec3;
 use glint::render::legacy::render_rows;
 use glint::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, GridLayout, PixelOffset, Sampler,
-    SamplerKind, Settings,
+    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Settings,
 };
+use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::scene::{Node, Scene};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};

@@ -398,7 +398,7 @@ fn object_space_textures_follow_their_object() {
     use glint::integrator::{NoObserver, RayKind};
     use glint::material::TextureSpace;
     use glint::math::{Mat4, Ray, Vec3};
-    use glint::scene::{Background, Camera, Material, Node, Phong, Scene, Shape, TextureKind};
+    use glint::scene::{Background, Camera, Material, Node, Phong, Scene, ShapeDesc, TextureKind};
     use glint::stats::Counters;
     use glint::world::{BuildOptions, World};
 
@@ -435,7 +435,7 @@ fn object_space_textures_follow_their_object() {
         root: Node::Transform {
             matrix: Mat4::from_translation(Vec3::new(shift, 0.0, 0.0)),
             child: Box::new(Node::Shape {
-                shape: Shape::Plane {
+                shape: ShapeDesc::Plane {
                     normal: Vec3::Z,
                     offset: 0.0,
                 },

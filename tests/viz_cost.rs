@@ -4,9 +4,8 @@
 use crate::common::*;
 use glint::accel::{AccelKind, Split};
 use glint::integrator::Whitted;
-use glint::render::{
-    render_image, CameraModel, Control, PixelOffset, Sampler, SamplerKind, Settings,
-};
+use glint::render::{render_image, CameraModel, Control, PixelOffset, Settings};
+use glint::sampler::{Sampler, SamplerKind};
 use glint::world::{BuildOptions, World};
 
 #[test]

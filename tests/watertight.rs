@@ -14,7 +14,7 @@
 use glam::{DMat4, DVec3};
 use glint::accel::{AccelKind, Split};
 use glint::math::{Ray, Vec3};
-use glint::scene::{Background, Camera, Mesh, Node, Scene, Shape};
+use glint::scene::{Background, Camera, Mesh, Node, Scene, ShapeDesc};
 use glint::shape::Shape as WorldShape;
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -74,7 +74,7 @@ fn scene() -> Scene {
         root: Node::Transform {
             matrix: placement().as_mat4(),
             child: Box::new(Node::Shape {
-                shape: Shape::Mesh(Arc::new(bumpy_sphere())),
+                shape: ShapeDesc::Mesh(Arc::new(bumpy_sphere())),
                 material: None,
             }),
         },
@@ -127,7 +127,7 @@ fn rays_through_edges_and_vertices_never_miss() {
         },
         AccelKind::Octree,
         AccelKind::Bvh(Split::Sah),
-        AccelKind::Bvh4,
+        AccelKind::Bvh8,
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
     ];

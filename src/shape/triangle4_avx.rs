@@ -44,7 +44,7 @@ pub struct Hits4 {
 /// comment), for the same `tmin` and `tmax`. Lanes whose vertices are NaN
 /// (unused) come out as the scalar test would leave them: not hit.
 ///
-/// Deliberately no `#[target_feature]`, as `bvh4`'s AVX box test: such a
+/// Deliberately no `#[target_feature]`, as `bvh8`'s AVX box test: such a
 /// function cannot be `#[inline(always)]`; inlined into a caller compiled
 /// with AVX2, the intrinsics inline too.
 ///

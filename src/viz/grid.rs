@@ -18,7 +18,7 @@ use super::draw::Canvas;
 use crate::accel::grid::Lattice;
 use crate::accel::Grid;
 use crate::math::{Vec2, Vec3};
-use crate::scene::{Material, Node, Phong, Scene, Shape};
+use crate::scene::{Material, Node, Phong, Scene, ShapeDesc};
 use crate::world::World;
 
 /// What the grid view colours its cells by.
@@ -107,7 +107,7 @@ impl Voxels {
                     }
                     for tri in face(b.min, b.max, axis, up) {
                         faces.push(Node::Shape {
-                            shape: Shape::Triangle(tri),
+                            shape: ShapeDesc::Triangle(tri),
                             material: Some(material),
                         });
                     }

@@ -356,7 +356,7 @@ impl World {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{AreaShape, Node, Scene, Shape as Desc};
+    use crate::scene::{AreaShape, Node, Scene, ShapeDesc as Desc};
 
     /// A quad light over a sphere: the aggregate and the occlusion test see
     /// only the sphere (the Whitted tree's rays are what they were), and

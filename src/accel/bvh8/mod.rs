@@ -48,7 +48,7 @@ use node::{Tri4, NO_ITEM};
 
 /// The fast BVH (8-wide nodes; the name predates them) over triangles
 /// (and, through a [`Fallback`], other shapes).
-pub struct Bvh4 {
+pub struct Bvh8 {
     nodes: Vec<Node>,
     tris: Vec<Tri4>,
     bounds: Aabb,
@@ -128,7 +128,7 @@ impl Fallback for [Primitive] {
     }
 }
 
-impl Bvh4 {
+impl Bvh8 {
     /// A BVH over the primitives `ids` of `prims`.
     pub fn new(prims: &[Primitive], ids: Vec<u32>) -> Self {
         Self::from_built(build::build(&Prims { prims, ids: &ids }))
@@ -144,7 +144,7 @@ impl Bvh4 {
     }
 
     fn from_built(b: build::Built) -> Self {
-        Bvh4 {
+        Bvh8 {
             deep: build::depth(&b.nodes) > traverse::SHALLOW_DEPTH,
             nodes: b.nodes,
             tris: b.tris,
@@ -221,7 +221,7 @@ impl Bvh4 {
     }
 }
 
-impl Aggregate for Bvh4 {
+impl Aggregate for Bvh8 {
     fn intersect(
         &self,
         prims: &[Primitive],
@@ -270,7 +270,7 @@ impl Aggregate for Bvh4 {
     }
 
     fn memory_bytes(&self) -> usize {
-        Bvh4::memory_bytes(self)
+        Bvh8::memory_bytes(self)
     }
 
     fn bounds(&self) -> Aabb {
@@ -279,7 +279,7 @@ impl Aggregate for Bvh4 {
 
     fn describe(&self) -> String {
         format!(
-            "bvh4 {} nodes, {} blocks",
+            "bvh8 {} nodes, {} blocks",
             self.nodes.len(),
             self.tris.len()
         )
@@ -299,7 +299,7 @@ mod tests {
     fn agrees_with_brute_force_on_a_soup() {
         for (seed, n) in [(3, 1), (4, 7), (21, 1500), (22, 20000)] {
             let prims = soup(seed, n);
-            let b = Bvh4::new(&prims, all(&prims));
+            let b = Bvh8::new(&prims, all(&prims));
             assert_agrees(&b, &prims, 3000);
         }
     }
@@ -323,7 +323,7 @@ mod tests {
             )))
         };
         let prims = vec![sphere(Vec3::ZERO, 0.5), tri(3.0), tri(4.0)];
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         // One leaf, one block: the sphere's lane beside the triangles'.
         assert_eq!(b.tris.len(), 1);
         let mut c = Counters::default();
@@ -337,7 +337,7 @@ mod tests {
 
         let mut soup = soup(8, 400);
         soup.rotate_right(100);
-        let b = Bvh4::new(&soup, all(&soup));
+        let b = Bvh8::new(&soup, all(&soup));
         assert_agrees(&b, &soup, 3000);
     }
 
@@ -361,7 +361,7 @@ mod tests {
             assert!(t.is_degenerate());
             prims.push(prim(Shape::Triangle(t)));
         }
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         assert!(b.bounds().is_finite());
         // The blocks hold every other item once (spheres flagged), and
         // nothing else.
@@ -376,7 +376,7 @@ mod tests {
     /// The tree's SAH cost, from its stored boxes: the root step, plus for
     /// every child box its surface area relative to the root's, times 1 for
     /// a node and times its number of 4-triangle blocks for a leaf.
-    fn sah_cost(b: &Bvh4) -> f64 {
+    fn sah_cost(b: &Bvh8) -> f64 {
         use node::{is_leaf, leaf_range, EMPTY};
         let area = |n: &node::Node, i: usize| {
             let p = &n.planes;
@@ -426,7 +426,7 @@ mod tests {
             ("soup", soup(5, 3000), 36.477, 12.12, 69.19),
             ("terrain", terrain(), 8.592, 9.70, 15.19),
         ] {
-            let b = Bvh4::new(&prims, all(&prims));
+            let b = Bvh8::new(&prims, all(&prims));
             let cost = sah_cost(&b);
             let mut c = Counters::default();
             let mut r = crate::accel::testutil::Rng::new(11);
@@ -468,7 +468,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .expect("a thread pool")
-                .install(|| Bvh4::new(&prims, all(&prims)))
+                .install(|| Bvh8::new(&prims, all(&prims)))
         };
         let (one, four) = (build(1), build(4));
         assert_eq!(one.nodes.len(), four.nodes.len());
@@ -497,7 +497,7 @@ mod tests {
             let t = Triangle::new(a, a + Vec3::X, a + Vec3::Y);
             prims.extend((0..6).map(|_| prim(Shape::Triangle(t))));
         }
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let mut seen = vec![0u32; prims.len()];
         let mut leaves = 0;
         for n in &b.nodes {
@@ -525,7 +525,7 @@ mod tests {
 
     #[test]
     fn empty_hits_nothing() {
-        let b = Bvh4::new(&[], vec![]);
+        let b = Bvh8::new(&[], vec![]);
         let r = Ray::new(Vec3::ZERO, Vec3::X);
         let mut c = Counters::default();
         assert!(b.intersect(&[], &r, 0.0, f32::INFINITY, &mut c).is_none());
@@ -537,7 +537,7 @@ mod tests {
         let prims: Vec<Primitive> = (0..4096)
             .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))
             .collect();
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let r = Ray::new(Vec3::X * -5.0, Vec3::X);
         let mut c = Counters::default();
         let h = b.intersect(&prims, &r, 0.0, f32::INFINITY, &mut c).unwrap();
@@ -556,7 +556,7 @@ mod tests {
     #[test]
     fn axis_parallel_rays_agree_and_still_cull() {
         let prims = terrain();
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let mut r = crate::accel::testutil::Rng::new(5);
         let mut queries = Vec::new();
         for i in 0..400 {
@@ -612,7 +612,7 @@ mod tests {
     #[test]
     fn queries_off_the_integer_path_agree_with_brute_force() {
         let prims = soup(13, 2000);
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let mut r = crate::accel::testutil::Rng::new(3);
         let mut queries = Vec::new();
         for i in 0..600 {
@@ -640,11 +640,11 @@ mod tests {
     #[test]
     fn both_stack_sizes_agree() {
         let prims = soup(9, 3000);
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let d = build::depth(&b.nodes);
         assert!((2..=traverse::SHALLOW_DEPTH).contains(&d), "{d}");
         assert!(!b.deep);
-        let deep = Bvh4 { deep: true, ..b };
+        let deep = Bvh8 { deep: true, ..b };
         for i in 0..2000 {
             let f = i as f32;
             let o = Vec3::new((f * 0.37).sin(), (f * 0.73).cos(), -9.0);
@@ -689,7 +689,7 @@ mod tests {
                 )))
             })
             .collect();
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let d = build::depth(&b.nodes);
         assert!(d > traverse::SHALLOW_DEPTH, "depth {d}");
         // Planned for its level, every node sits within the deepest level.
@@ -717,7 +717,7 @@ mod tests {
     #[test]
     fn barycentrics_are_the_triangles_own() {
         let prims = soup(12, 3000);
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let mut hits = 0;
         for i in 0..3000 {
             let f = i as f32;
@@ -755,7 +755,7 @@ mod tests {
     #[test]
     fn skipping_the_triangle_a_ray_leaves_changes_no_answer() {
         let prims = soup(14, 3000);
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let ns = &mut crate::stats::NoStats;
         let inf = f32::INFINITY;
         let (mut rays, mut blocked) = (0, 0);
@@ -805,7 +805,7 @@ mod tests {
         };
         let c = (tr.v[0] + tr.v[1] + tr.v[2]) / 3.0;
         let s = Ray::new(c - 3.0 * tr.normal, tr.normal);
-        let b1 = Bvh4::new(&one, vec![0]);
+        let b1 = Bvh8::new(&one, vec![0]);
         assert!(b1.any(&one[..], &s, 0.0, inf, ns));
         assert!(!b1.any_except(&one[..], &s, 0.0, inf, 0, ns));
         assert!(b1.any_except(&one[..], &s, 0.0, inf, 1, ns));
@@ -819,7 +819,7 @@ mod tests {
             behind(tr.v[1]),
             behind(tr.v[2]),
         ));
-        let b2 = Bvh4::new(&two, vec![0, 1]);
+        let b2 = Bvh8::new(&two, vec![0, 1]);
         assert_eq!(b2.tris.len(), 1, "one block");
         assert!(b2.any(&two[..], &s, 0.0, inf, ns));
         assert!(!b2.any_except(&two[..], &s, 0.0, inf, 0, ns));
@@ -828,7 +828,7 @@ mod tests {
     #[test]
     fn statistics_are_optional() {
         let prims = soup(5, 500);
-        let b = Bvh4::new(&prims, all(&prims));
+        let b = Bvh8::new(&prims, all(&prims));
         let r = Ray::new(Vec3::new(-9.0, 0.1, 0.2), Vec3::X);
         let mut c = Counters::default();
         let with = b.closest(&prims[..], &r, 0.0, f32::INFINITY, &mut c);

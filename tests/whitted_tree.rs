@@ -1,12 +1,14 @@
-//! Properties of the Whitted ray tree on hand-built and shared scenes:
-//! no self-intersection acne, the bounce and weight limits, shadows.
+//! Properties of the Whitted ray tree (the library's `Whitted`) on hand-built
+//! and shared scenes: no self-intersection acne, the bounce and weight
+//! limits, shadows, glossy spreads. `raytree_cli.rs` tests the `glint
+//! raytree` command.
 
 use crate::common;
 use glint::format::load_scene;
 use glint::integrator::{NoObserver, RayKind, RayRecorder, Whitted};
 use glint::math::{Ray, Vec2, Vec3};
 use glint::render::{render, CameraModel, PixelOffset};
-use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape};
+use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 
@@ -90,7 +92,7 @@ fn secondary_rays_never_rehit_their_own_surface() {
 
 fn sphere(center: Vec3, radius: f32, material: usize) -> Node {
     Node::Shape {
-        shape: Shape::Sphere { center, radius },
+        shape: ShapeDesc::Sphere { center, radius },
         material: Some(material),
     }
 }
@@ -120,7 +122,7 @@ fn floor_scene(glass: Phong) -> Scene {
         ],
         root: Node::Group(vec![
             Node::Shape {
-                shape: Shape::Plane {
+                shape: ShapeDesc::Plane {
                     normal: Vec3::Y,
                     offset: 0.0,
                 },
@@ -207,14 +209,14 @@ fn mirror_box() -> Scene {
     let mut scene = floor_scene(mirror);
     scene.root = Node::Group(vec![
         Node::Shape {
-            shape: Shape::Plane {
+            shape: ShapeDesc::Plane {
                 normal: Vec3::X,
                 offset: -1.0,
             },
             material: Some(1),
         },
         Node::Shape {
-            shape: Shape::Plane {
+            shape: ShapeDesc::Plane {
                 normal: Vec3::NEG_X,
                 offset: -1.0,
             },
@@ -469,7 +471,7 @@ fn glossy_reflection_averages_its_lobe_and_spreads_only_at_the_first_hit() {
         ambient: Vec3::ZERO,
     };
     let plane = |normal: Vec3, offset: f32| Node::Shape {
-        shape: Shape::Plane { normal, offset },
+        shape: ShapeDesc::Plane { normal, offset },
         material: Some(1),
     };
     scene.root = Node::Group(vec![plane(Vec3::Y, 0.0)]);

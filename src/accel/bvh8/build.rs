@@ -148,7 +148,7 @@ enum Plan {
     Median { axis: usize },
 }
 
-/// The built tree (see `Bvh4`).
+/// The built tree (see `Bvh8`).
 pub(crate) struct Built {
     pub nodes: Vec<Node>,
     pub tris: Vec<Tri4>,

@@ -247,7 +247,7 @@ mod portable {
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::*;
-    use crate::accel::bvh4::traverse::Avx;
+    use crate::accel::bvh8::traverse::Avx;
 
     #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2,fma")]
@@ -299,9 +299,9 @@ mod avx2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh4::node::NO_ITEM;
+    use crate::accel::bvh8::node::NO_ITEM;
     use crate::accel::testutil::{ray, soup, Rng};
-    use crate::accel::Bvh4;
+    use crate::accel::Bvh8;
     use crate::stats::Counters;
 
     /// The portable copy (the only one on a CPU without AVX2, so never the
@@ -310,7 +310,7 @@ mod tests {
     #[test]
     fn the_portable_copy_answers_as_the_dispatched_one() {
         let prims = soup(9, 2000);
-        let b = Bvh4::new(&prims, (0..prims.len() as u32).collect());
+        let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
         let (nodes, tris, fb) = (&b.nodes, &b.tris, prims.as_slice());
         let mut r = Rng::new(10);
         let (mut hits, mut blocked) = (0, 0);

@@ -709,7 +709,7 @@ pub(crate) fn any<
 mod tests {
     use super::super::build::{self, MAX_DEPTH};
     use super::*;
-    use crate::accel::bvh4::node::leaf;
+    use crate::accel::bvh8::node::leaf;
     use crate::stats::NoStats;
 
     /// The worst case for the stack: a chain of `MAX_DEPTH` inner nodes,
