@@ -162,7 +162,7 @@ pub async fn scene(State(app): State<Arc<App>>, Query(q): Q) -> Answer {
         let mut spheres = Vec::new();
         let mut planes = Vec::new();
         let mut others = Vec::new();
-        for p in &world.prims {
+        for p in world.prims() {
             match &p.shape {
                 glint::shape::Shape::Triangle(t) => tris.push(t.v),
                 glint::shape::Shape::Sphere(s) => spheres.push(json!([s.center.x, s.center.y, s.center.z, s.radius])),

@@ -5,7 +5,8 @@
 use glint::accel::AccelKind;
 use glint::limits;
 use glint::math::Vec3;
-use glint::render::{Filter, SamplerKind};
+use glint::render::Filter;
+use glint::sampler::SamplerKind;
 use glint::scene::Camera;
 use std::collections::HashMap;
 use std::str::FromStr;

@@ -12,7 +12,8 @@
 use super::params::{IntegratorName, View};
 use glint::integrator::{AmbientOcclusion, AoSettings, Whitted};
 use glint::math::Vec3;
-use glint::render::{render_image, CameraModel, Control, Rendered, Sampler, SamplerKind, Settings};
+use glint::render::{render_image, CameraModel, Control, Rendered, Settings};
+use glint::sampler::{Sampler, SamplerKind};
 use glint::scene::Scene;
 use glint::world::World;
 
