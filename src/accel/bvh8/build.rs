@@ -41,7 +41,7 @@ pub(crate) trait Source: Sync {
 const BINS: usize = 32;
 /// Cost of a binary split step relative to testing one block of four items.
 /// On the 8-wide tree 0.3, 0.5, 0.8 and 1.2 once measured the same within
-/// noise; with the host's memory slower (session 16), 1.0 with leaves of up
+/// noise; with the host's memory slower, 1.0 with leaves of up
 /// to 16 items gave incoherent rays 5-14% more (fewer node levels, each a
 /// cache miss on a large mesh), primary and shadow rays the same, and 8-13%
 /// fewer bytes per triangle.
@@ -1179,9 +1179,9 @@ mod tests {
     /// SAH peels a few items at a time) started at each level a range of
     /// its size can reach (from level 15 on, 300 items are already
     /// median-split above) ends within `MAX_DEPTH`, at the depths measured
-    /// when this test was written (session 10; measured again in session
-    /// 16, when the split cost and the leaf size changed: the chain started
-    /// at the root now ends at 4, not 8). Planning a node's children at its
+    /// when this test was written (and again when the split cost and the
+    /// leaf size changed: the chain started at the root now ends at 4, not
+    /// 8). Planning a node's children at its
     /// own level instead moves the switch a level down (the chain then ends
     /// at 17 or 18: within `MAX_DEPTH` here, but not in general). Like
     /// `build_quality_stays_where_it_was_measured`, a deliberate change to
