@@ -880,9 +880,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_boxes_match_portable() {
-        if !(std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma"))
-        {
+        if !crate::testdata::avx2_fma("avx_boxes_match_portable") {
             return;
         }
         // SAFETY: AVX2 and FMA detected just above.
