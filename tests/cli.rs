@@ -89,7 +89,6 @@ fn unknown_flag_is_named_and_preview_flags_are_ignored() {
             "20",
             "-output",
             "a.png",
-            "-gui",
             "-tessellation",
             "10",
             "5",
@@ -100,7 +99,7 @@ fn unknown_flag_is_named_and_preview_flags_are_ignored() {
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.lines().count(), 1, "one line on stderr: {err}");
-    assert!(err.contains("-gui") && err.contains("-gouraud"));
+    assert!(err.contains("-tessellation") && err.contains("-gouraud"));
     assert!(dir.join("a.png").exists());
 }
 

@@ -293,6 +293,34 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
         );
 }
 
+/// After [`merge`] of a render limited to `region` (tiles skipped where
+/// their films cannot reach it): marks the rows of `region` complete when
+/// every tile whose film reaches into `region` was rendered, so a crop of
+/// any shape is complete without the tile columns it does not need. Rows
+/// outside `region` keep [`merge`]'s answer.
+pub fn complete_region(
+    films: &[Option<TileFilm>],
+    rects: &[Rect],
+    support: u32,
+    region: Rect,
+    frame: &mut Frame,
+) {
+    let (w, h) = (frame.width, frame.height);
+    let needed = rects
+        .iter()
+        .zip(films)
+        .filter(|(t, _)| t.grown(support, w, h).overlaps(&region));
+    let mut all = true;
+    for (_, f) in needed {
+        all &= f.is_some();
+    }
+    if all {
+        for row in region.row0..region.row1.min(h) {
+            frame.complete[row as usize] = true;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -29,6 +29,7 @@ mod bench_rays;
 mod deep;
 mod merge;
 mod raytree;
+mod serve;
 mod structure;
 mod traverse;
 
@@ -85,6 +86,8 @@ enum Command {
     Structure(structure::StructureArgs),
     /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
     Merge(merge::MergeArgs),
+    /// Serve the scene live in a browser on 127.0.0.1: progressive render, click a pixel for its ray tree.
+    Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format).
@@ -124,7 +127,12 @@ linear 32-bit values unclamped. An unsupported extension is refused before any w
 
 The eye ray of each pixel goes through the pixel's centre. The `raytracer` command, which \
 runs the course's command lines verbatim, uses the pixel's lower-left corner instead, the \
-course's convention, which its reference images match exactly.";
+course's convention, which its reference images match exactly.
+
+Conventions (docs/scene-format.md, \"Conventions\"): a pixel is diffuse colour x irradiance, with no \
+1/pi; a flat area light's power is shared by its two faces; an orthographic camera sees objects \
+behind its centre plane (rays start at t = -inf, as in the course), a perspective camera does not; \
+`aperture` is the lens radius and the focus is a plane at `focusDistance` along the view direction.";
 
 #[derive(Args)]
 struct RenderArgs {
@@ -187,7 +195,7 @@ struct RenderArgs {
     /// Seed of the random samplers (changes the noise, not its statistics).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma).
+    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma, a round kernel; `raytracer -gaussian_filter` keeps the course's square kernel, also gaussian-square:SIGMA).
     #[arg(long, default_value = "box:0.5")]
     filter: Filter,
     /// Whitted's adaptive supersampling: split a pixel square where its corners differ by more than this (0..1).
@@ -274,6 +282,7 @@ fn real_main() -> ExitCode {
         Command::Info { scene } => info(scene),
         Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
+        Command::Serve(a) => serve::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
                 let dir = PathBuf::from("../shared/scenes/6837");
