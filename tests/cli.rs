@@ -387,3 +387,34 @@ fn hdr_outputs_by_extension() {
         "EXR magic number"
     );
 }
+
+/// `raytracer -stats` prints the scene's bounds in the file's own
+/// coordinates (world space), not in the camera-centred space glint renders
+/// in: a sphere of radius 1 at (10, 20, 30) seen from (10, 20, 40).
+#[test]
+fn raytracer_stats_prints_world_bounds() {
+    let dir = scratch("stats-bounds");
+    std::fs::write(
+        dir.join("s.txt"),
+        "PerspectiveCamera { center 10 20 40 direction 0 0 -1 up 0 1 0 angle 30 }
+         Group { numObjects 1 Sphere { center 10 20 30 radius 1 } }",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args([
+            "-input", "s.txt", "-size", "8", "8", "-output", "s.png", "-stats",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.contains("scene bounds"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        line.ends_with("(9.0000, 19.0000, 29.0000) -> (11.0000, 21.0000, 31.0000)"),
+        "{line}"
+    );
+}

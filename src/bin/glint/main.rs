@@ -66,7 +66,7 @@ enum Command {
     },
     /// Time the tile render loop against the old row loop at 1 sample per pixel.
     BenchLoop {
-        /// Scene files (default: three course scenes from ../shared).
+        /// Scene files (default: three course scenes from $GLINT_SHARED or ../shared; exits 2 without them).
         scenes: Vec<PathBuf>,
         /// Square image size.
         #[arg(long, default_value_t = 400)]
@@ -90,7 +90,7 @@ enum Command {
     Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
-        /// Scene file (MIT 6.837 format).
+        /// Scene file (MIT 6.837 format) or a bare .obj mesh.
         scene: PathBuf,
     },
 }
@@ -285,7 +285,16 @@ fn real_main() -> ExitCode {
         Command::Serve(a) => serve::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
-                let dir = PathBuf::from("../shared/scenes/6837");
+                let shared = std::env::var_os("GLINT_SHARED")
+                    .map_or_else(|| PathBuf::from("../shared"), PathBuf::from);
+                let dir = shared.join("scenes/6837");
+                if !dir.is_dir() {
+                    eprintln!(
+                        "glint bench-loop: the default scenes are the course's, in {} (needs the course data: set GLINT_SHARED); or name scene files, e.g. glint bench-loop scenes/whitted.txt",
+                        dir.display()
+                    );
+                    return ExitCode::from(2);
+                }
                 [
                     "scene7_01_sphere_triangle.txt",
                     "scene4_14_faceted_gem.txt",
