@@ -213,7 +213,7 @@ pub fn view(q: &HashMap<String, String>, d: &Defaults, scene_camera: &Camera) ->
             ))
         }
     };
-    let accel: AccelKind = named(q, "accel", &d.accel, "an accelerator (bvh4, none, grid, grid:NxNxN, nested-grid, octree, octree-inner, bvh, bvh-median, bvh-midpoint, bvh-hierarchy)")?;
+    let accel: AccelKind = named(q, "accel", &d.accel, "an accelerator (bvh8, none, grid, grid:NxNxN, nested-grid, octree, octree-inner, bvh, bvh-median, bvh-midpoint, bvh-hierarchy)")?;
     if let AccelKind::Grid { res: Some(r) } = accel {
         if r.iter().any(|&n| n > MAX_GRID_RES) {
             return Err(format!(

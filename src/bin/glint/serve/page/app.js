@@ -21,7 +21,7 @@ const S = {
   tree: null, treeOverlay: null,
   walk: null, grid: null,
   spp: 0, target: 0, passes: 0, done: false, rendering: false,
-  renders: 0,
+  renders: 0, started: false,
 };
 window.glint = S;
 
@@ -556,10 +556,10 @@ async function poll() {
         $('error-text').textContent = e.text;
       } else $('error').hidden = true;
       if (st.loaded && st.version !== S.version) {
-        const first = S.version < 0;
         S.version = st.version;
         await loadScene();
-        if (!first) { refine(); loadGrid(); if (S.pick && !S.pick.stale) refreshPick(); }
+        // Before start() has run, it starts the first render itself.
+        if (S.started) { refine(); loadGrid(); if (S.pick && !S.pick.stale) refreshPick(); }
       }
     }
   } catch (e) { status('server unreachable'); }
@@ -587,6 +587,7 @@ async function start() {
   $('show-grid').addEventListener('change', loadGrid);
   $('show-cost').addEventListener('change', () => { if ($('show-cost').checked) loadCost(); else $('cost-box').hidden = true; });
   await poll();
+  S.started = true;
   if (S.version >= 0) refine();
 }
 
