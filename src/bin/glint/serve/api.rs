@@ -242,6 +242,10 @@ pub async fn render(State(app): State<Arc<App>>, Query(q): Q) -> Answer {
                     .is_none_or(|a| a.key != key || a.passes != want);
             if fresh {
                 let n = (view.size.0 * view.size.1) as usize;
+                *acc = None;
+                drop(acc);
+                app.make_room(&session, n as u64);
+                acc = lock(&session.accum);
                 *acc = Some(Accum {
                     key: key.clone(),
                     size: view.size,

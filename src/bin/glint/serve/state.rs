@@ -24,6 +24,11 @@ pub const MAX_RENDERS: usize = 2;
 /// Sessions kept (each holds at most one accumulated image); the least
 /// recently used is dropped, and its render cancelled, past this.
 pub const MAX_SESSIONS: usize = 64;
+/// Most pixels of accumulated images kept over all sessions (28 bytes each:
+/// the colour sum and the cost counts, so about 0.9 GiB). A session that
+/// needs room takes it from the least recently used others, whose images are
+/// dropped (they start over at their next request).
+pub const MAX_ACCUM_PIXELS: u64 = 32 << 20;
 /// Worlds kept built (one per scene version and accelerator).
 const MAX_WORLDS: usize = 4;
 
@@ -336,6 +341,29 @@ impl App {
         let x = Arc::new(Session::new());
         s.insert(id.to_owned(), x.clone());
         x
+    }
+
+    /// Drops the accumulated images of the least recently used sessions
+    /// other than `me` until `need` more pixels fit in [`MAX_ACCUM_PIXELS`].
+    pub fn make_room(&self, me: &Arc<Session>, need: u64) {
+        let sessions = lock(&self.sessions);
+        let size = |s: &Session| {
+            lock(&s.accum)
+                .as_ref()
+                .map_or(0, |a| u64::from(a.size.0) * u64::from(a.size.1))
+        };
+        let mut others: Vec<&Arc<Session>> =
+            sessions.values().filter(|s| !Arc::ptr_eq(s, me)).collect();
+        let mut total: u64 = others.iter().map(|s| size(s)).sum();
+        others.sort_by_key(|s| *lock(&s.last_used));
+        for s in others {
+            if total + need <= MAX_ACCUM_PIXELS {
+                break;
+            }
+            total -= size(s);
+            s.cancel();
+            *lock(&s.accum) = None;
+        }
     }
 
     /// The session named `id`, if it exists.
