@@ -35,6 +35,9 @@ pub struct Job {
     pub input: PathBuf,
     /// Colour image, if wanted.
     pub output: Option<PathBuf>,
+    /// How the colour image's 8-bit formats encode values (the course's
+    /// linear truncation unless `glint render --srgb`).
+    pub encoding: crate::output::Encoding,
     /// Image width.
     pub width: u32,
     /// Image height.
@@ -466,6 +469,7 @@ impl Job {
         Self {
             input,
             output: None,
+            encoding: crate::output::Encoding::Linear,
             width,
             height,
             depth: None,
@@ -665,6 +669,15 @@ impl Job {
             crate::piece::write(&out, &frame, p, &hash, &stats)?;
             written.push(out);
         }
+        if let (None, Some(out)) = (&self.piece, &self.output) {
+            let out = if complete {
+                out.clone()
+            } else {
+                partial_path(out)
+            };
+            crate::output::write_rgb_as(&out, w, h, &frame.color, self.encoding)?;
+            written.push(out);
+        }
         let mut write_sized = |out: &PathBuf,
                                (w, h): (u32, u32),
                                pixels: &[crate::math::Vec3]|
@@ -680,11 +693,6 @@ impl Job {
         };
         let mut write =
             |out: &PathBuf, pixels: &[crate::math::Vec3]| write_sized(out, (w, h), pixels);
-        if self.piece.is_none() {
-            if let Some(out) = &self.output {
-                write(out, &frame.color)?;
-            }
-        }
         if let Some((t0, t1, out)) = &self.depth {
             write(out, &frame.depth_image(*t0, *t1))?;
         }

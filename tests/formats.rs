@@ -261,3 +261,43 @@ fn unsupported_extension_is_refused_before_any_work() {
         "{err}"
     );
 }
+
+/// `glint render` writes 8-bit images with the course's linear truncation
+/// by default and with the sRGB curve, rounded, under `--srgb` (PNGs then
+/// carry the `sRGB` chunk): a flat colour of 0.5 is byte 127, or 188.
+#[test]
+fn srgb_flag_encodes_eight_bit_outputs_and_marks_pngs() {
+    let dir = scratch("srgb");
+    std::fs::write(
+        dir.join("flat.txt"),
+        "OrthographicCamera { center 0 0 5 direction 0 0 -1 up 0 1 0 size 4 }
+         Background { color 0.5 0.5 0.5 }
+         Group { numObjects 0 }",
+    )
+    .unwrap();
+    for (flag, byte, chunk) in [(None, 127u8, false), (Some("--srgb"), 188, true)] {
+        for ext in ["png", "tga"] {
+            let name = format!("flat_{}.{ext}", flag.is_some());
+            let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+                .args([
+                    "render", "flat.txt", "-o", &name, "--size", "4", "3", "--quiet",
+                ])
+                .args(flag)
+                .current_dir(&dir)
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let img = image::open(dir.join(&name)).unwrap().to_rgb8();
+            assert!(img.pixels().all(|p| p.0 == [byte; 3]), "{name}");
+            if ext == "png" {
+                let bytes = std::fs::read(dir.join(&name)).unwrap();
+                let has = bytes.windows(4).any(|w| w == b"sRGB");
+                assert_eq!(has, chunk, "{name}: sRGB chunk");
+            }
+        }
+    }
+}

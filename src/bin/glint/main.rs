@@ -141,6 +141,9 @@ struct RenderArgs {
     /// Output image: .png, .tga, .ppm, .bmp (8-bit); .exr, .pfm (unclamped float).
     #[arg(short, long)]
     output: PathBuf,
+    /// Encode 8-bit outputs (.png .tga .ppm .bmp) with the sRGB curve, rounded, and mark PNGs sRGB, as image viewers assume. The default stores the linear values truncated to bytes, the course's convention: raytracer's reference images, glint's thumbnails and image hashes compare byte for byte across both commands. .exr/.pfm stay linear.
+    #[arg(long)]
+    srgb: bool,
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
     size: Vec<u32>,
@@ -375,6 +378,9 @@ fn render(a: RenderArgs) -> ExitCode {
         return ExitCode::from(2);
     }
     job.output = Some(a.output);
+    if a.srgb {
+        job.encoding = glint::output::Encoding::Srgb;
+    }
     job.integrator.shadows = a.shadows || a.transparent_shadows;
     job.integrator.transparent_shadows = a.transparent_shadows;
     job.integrator.shade_back = a.shade_back;
