@@ -64,7 +64,7 @@ fn main() {
     ] {
         let scene = load_scene(&scenes.join(file)).unwrap();
         let world = World::build(&scene, BuildOptions::default());
-        let cam = CameraModel::new(&world.camera);
+        let cam = CameraModel::new(world.camera());
         let base = Settings::one_ray((SIZE, SIZE), PixelOffset::CENTER);
         let run = |s: &Settings| -> Rendered {
             render_image(&world, &cam, &integrator, s, Control::default())

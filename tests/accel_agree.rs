@@ -515,7 +515,7 @@ fn check(accel: AccelKind, flatten: bool) -> (Counters, Counters) {
                 q.ray,
                 q.tmin,
                 q.tmax,
-                world.accel.describe(),
+                world.accel().describe(),
             );
             let got = world.occluded(&q.ray, q.tmin, q.tmax, &mut ca);
             assert_eq!(
@@ -724,22 +724,22 @@ fn cost_report() {
             let n = queries.len() as f64;
             println!(
                 "{name:6} {:32} build {:7.1} ms  tests/ray {:8.1}  nodes/ray {:6.1}  {us:6.2} µs/ray  ({hits} hits)",
-                w.accel.describe(),
-                w.build_ms,
+                w.accel().describe(),
+                w.build_ms(),
                 c.intersection_tests as f64 / n,
                 c.nodes_visited as f64 / n,
             );
         }
         // What mailboxing saves: the same grid with and without it.
         let w = World::build(&sc, BuildOptions::default());
-        let ids: Vec<u32> = (0..w.prims.len() as u32).collect();
+        let ids: Vec<u32> = (0..w.prims().len() as u32).collect();
         for res in [None, Some([128, 128, 128])] {
-            let mut grid = Grid::new(&w.prims, ids.clone(), res);
+            let mut grid = Grid::new(w.prims(), ids.clone(), res);
             for on in [true, false] {
                 grid.set_mailbox(on);
                 let mut c = Counters::default();
                 for q in &queries {
-                    grid.intersect(&w.prims, &q.ray, q.tmin, q.tmax, &mut c);
+                    grid.intersect(w.prims(), &q.ray, q.tmin, q.tmax, &mut c);
                 }
                 println!(
                     "{name:6} {:32} mailbox {on:5}  tests/ray {:8.2}",
@@ -860,8 +860,8 @@ fn moving_objects_and_timed_rays() {
                 let q = random_query(&mut r, &brute, false);
                 let time = r.f();
                 // Half the rays aim at where a random primitive is at their time.
-                let aim = if r.chance(0.5) && !brute.prims.is_empty() {
-                    center_at(&brute.prims[r.below(brute.prims.len())].shape, time)
+                let aim = if r.chance(0.5) && !brute.prims().is_empty() {
+                    center_at(&brute.prims()[r.below(brute.prims().len())].shape, time)
                         .filter(|c| c.is_finite() && (*c - q.ray.origin).length() > 1e-3)
                 } else {
                     None
@@ -884,13 +884,13 @@ fn moving_objects_and_timed_rays() {
                         ),
                         "{} (flatten {flatten}), moving scene {seed}, ray {i}: {ray:?}\n\
                          brute {want:?}\ngot {got:?}",
-                        w.accel.describe()
+                        w.accel().describe()
                     );
                     assert_eq!(
                         want_occ,
                         w.occluded(&ray, q.tmin, q.tmax, &mut c),
                         "{} occlusion, moving scene {seed}, ray {i}",
-                        w.accel.describe()
+                        w.accel().describe()
                     );
                 }
                 rays += 1;

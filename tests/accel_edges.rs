@@ -247,10 +247,10 @@ fn edge_rays_agree_with_brute_force_for_every_accelerator() {
         flatten: true,
     };
     let brute = World::build_world_space(&scene, opts(AccelKind::None));
-    let ids: Vec<u32> = (0..brute.prims.len() as u32).collect();
+    let ids: Vec<u32> = (0..brute.prims().len() as u32).collect();
     let mut c = Counters::default();
     for res in [[4, 4, 4], [8, 8, 8], [3, 5, 7]] {
-        let lattice = *Grid::new(&brute.prims, ids.clone(), Some(res)).lattice();
+        let lattice = *Grid::new(brute.prims(), ids.clone(), Some(res)).lattice();
         let rays = edge_rays(&lattice);
         let answers: Vec<_> = rays
             .iter()
@@ -361,7 +361,7 @@ fn balls_on_a_floor_render_alike_with_every_accelerator() {
                 flatten: true,
             },
         );
-        let cam = CameraModel::new(&world.camera);
+        let cam = CameraModel::new(world.camera());
         let w = Whitted {
             shadows: true,
             ..Whitted::default()

@@ -141,7 +141,7 @@ fn stream_of(sampler: &Sampler, k: u32) -> glint::render::SampleStream<'_> {
 fn rectangle_light_past_an_occluder_edge() {
     let sc = penumbra_scene();
     let world = World::build_world_space(&sc, BuildOptions::default());
-    let light = &world.lights[0];
+    let light = &world.lights()[0];
     assert!(!is_delta(light));
     let sampler = Sampler::new(SamplerKind::Sobol, 1, 1);
     let n = 4096;
@@ -369,7 +369,7 @@ fn render_with(
     seed: u64,
 ) -> Vec<Vec3> {
     let world = World::build(sc, BuildOptions::default());
-    let cam = CameraModel::new(&world.camera).with_lens(sc.effects.lens);
+    let cam = CameraModel::new(world.camera()).with_lens(sc.effects.lens);
     let mut s = Settings::one_ray((size, size), PixelOffset::CENTER);
     s.sampler = Sampler::new(kind, spp, seed);
     render_image(&world, &cam, integrator, &s, Control::default())

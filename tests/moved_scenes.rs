@@ -167,7 +167,7 @@ fn image_in(scene: &Scene, space: Space) -> Vec<[u8; 3]> {
         Space::Camera => World::build(scene, BuildOptions::default()),
         Space::World => World::build_at(scene, BuildOptions::default(), glam::DVec3::ZERO),
     };
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let (frame, _) = render(
         &world,
         &camera,

@@ -580,7 +580,7 @@ impl RayObserver for FiniteRays {
 /// pixel conventions, and returns what went wrong (empty when all is well).
 pub fn check_scene(name: &str, scene: &Scene, opts: BuildOptions) -> Vec<String> {
     let world = World::build(scene, opts);
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let mut problems = Vec::new();
     // A NaN camera ray hits nothing and would pass for background.
     'sizes: for (w, h) in [(24, 24), (25, 17)] {
@@ -662,7 +662,7 @@ fn extreme_scenes_render_finite_with_transforms_kept() {
 fn extreme_scenes_are_not_empty() {
     for (name, s) in extreme_scenes() {
         let world = World::build(&s, BuildOptions::default());
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         let (frame, _) = render(
             &world,
             &camera,

@@ -59,7 +59,7 @@ fn secondary_rays_never_rehit_their_own_surface() {
         let name = path.display();
         let scene = load_scene(path).unwrap();
         let world = World::build(&scene, BuildOptions::default());
-        let cam = CameraModel::new(&world.camera);
+        let cam = CameraModel::new(world.camera());
         let mut c = Counters::default();
         for _ in 0..400 {
             let s = Vec2::new(rng.next(), rng.next());
@@ -71,7 +71,7 @@ fn secondary_rays_never_rehit_their_own_surface() {
                 let r = h.spawn_ray(d);
                 if let Some(h2) = world.intersect(&r, 0.0, f32::INFINITY, &mut c) {
                     let flat = !matches!(
-                        world.prims[h.prim as usize].shape,
+                        world.prims()[h.prim as usize].shape,
                         glint::shape::Shape::Sphere(_) | glint::shape::Shape::Transformed(_)
                     );
                     assert!(
@@ -292,7 +292,7 @@ fn back_faces_are_black_unless_shade_back() {
     }];
     scene.root = sphere(Vec3::ZERO, 3.0, 0);
     let world = World::build(&scene, BuildOptions::default());
-    let cam = CameraModel::new(&world.camera);
+    let cam = CameraModel::new(world.camera());
     let px = |w: &Whitted| {
         let (f, _) = render(&world, &cam, w, (3, 3), PixelOffset::CENTER);
         f.color[4]

@@ -152,7 +152,7 @@ fn overlay_shows_every_ray_of_the_gem() {
     };
     let scene = glint::format::load_scene(&scenes.join("scene4_14_faceted_gem.txt")).unwrap();
     let world = glint::world::World::build(&scene, Default::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let integrator = glint::integrator::Whitted {
         bounces: 5,
         weight_cutoff: 0.01,

@@ -147,7 +147,7 @@ fn reference_quirks(scene: &Scene, wood_as_marble: bool) -> (Scene, Scene) {
 /// `step`-th pixel of a `w`×`h` image (rows top first).
 fn trace_points(scene: &Scene, integrator: &Whitted, (w, h): (u32, u32), step: u32) -> Vec<Vec3> {
     let world = World::build(scene, BuildOptions::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let rows: Vec<u32> = (0..h).step_by(step as usize).collect();
     rows.par_iter()
         .flat_map_iter(|&row| {

@@ -32,7 +32,7 @@ fn per_pixel_costs_sum_to_the_totals() {
                 flatten: true,
             },
         );
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         for spp in [1, 4] {
             let mut settings = Settings::one_ray((37, 23), PixelOffset::CENTER);
             settings.pixel_cost = true;

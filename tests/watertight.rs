@@ -94,7 +94,7 @@ fn rays(world: &World) -> Vec<Ray> {
     let mut out = Vec::new();
     let mesh = bumpy_sphere();
     let m = placement();
-    let world_vertex = |p: Vec3| (m.transform_point3(p.as_dvec3()) - world.origin).as_vec3();
+    let world_vertex = |p: Vec3| (m.transform_point3(p.as_dvec3()) - world.origin()).as_vec3();
     for t in &mesh.triangles {
         let v = t.map(|i| world_vertex(mesh.positions[i as usize]));
         for k in 0..3 {
@@ -177,7 +177,7 @@ fn moller_trumbore(v: [Vec3; 3], r: &Ray) -> Option<f32> {
 fn moller_trumbore_leaks_on_the_same_rays() {
     let world = World::build(&scene(), BuildOptions::default());
     let tris: Vec<[Vec3; 3]> = world
-        .prims
+        .prims()
         .iter()
         .filter_map(|p| match &p.shape {
             WorldShape::Triangle(t) => Some(t.v),

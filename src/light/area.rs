@@ -4,6 +4,7 @@
 //! whole contribution.
 
 use super::Incident;
+pub use crate::math::warp::concentric_disk;
 use crate::math::{gamma, SurfacePoint, Vec2, Vec3};
 use crate::scene::AreaShape;
 use std::f32::consts::{PI, TAU};
@@ -126,26 +127,10 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     }
 }
 
-/// Shirley and Chiu's concentric map from the square to the unit disk: it
-/// keeps strata compact (a polar map squeezes them near the centre).
-pub fn concentric_disk(u: Vec2) -> Vec2 {
-    let a = 2.0 * u - Vec2::ONE;
-    if a == Vec2::ZERO {
-        return Vec2::ZERO;
-    }
-    let (r, theta) = if a.x.abs() > a.y.abs() {
-        (a.x, PI / 4.0 * (a.y / a.x))
-    } else {
-        (a.y, PI / 2.0 - PI / 4.0 * (a.x / a.y))
-    };
-    Vec2::new(theta.cos(), theta.sin()) * r
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::testing::{check_error_box, Lcg};
-    use glam::DVec3;
 
     /// Mean of the estimator over a fine grid of samples.
     fn irradiance(shape: &AreaShape, p: Vec3, n: Vec3) -> f32 {
@@ -367,54 +352,5 @@ mod tests {
                 check_error_box(at, truth, Some(n), limit, &format!("{sphere:?} at {u}"));
             }
         }
-    }
-
-    /// Equal areas of the square go to equal areas of the disk: over a
-    /// fine grid, the moments and the share of each ring and sector are a
-    /// uniform disk's.
-    #[test]
-    fn concentric_map_is_uniform_over_the_disk() {
-        let k = 200;
-        let (mut m, mut inner) = (DVec3::ZERO, 0);
-        let mut sectors = [0u32; 8];
-        for i in 0..k {
-            for j in 0..k {
-                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
-                let d = concentric_disk(u).as_dvec2();
-                m += DVec3::new(d.x, d.y, d.x * d.x);
-                inner += u32::from(d.length() < 0.5);
-                let a = d.y.atan2(d.x).rem_euclid(std::f64::consts::TAU);
-                sectors[((a / std::f64::consts::FRAC_PI_4) as usize).min(7)] += 1;
-            }
-        }
-        let n = (k * k) as f64;
-        let m = m / n;
-        assert!(m.x.abs() < 1e-3 && m.y.abs() < 1e-3, "mean {m}");
-        assert!((m.z - 0.25).abs() < 1e-3, "E[x²] {}", m.z);
-        assert!((inner as f64 / n - 0.25).abs() < 2e-3, "inner ring {inner}");
-        for s in sectors {
-            assert!((s as f64 / n - 0.125).abs() < 2e-3, "{sectors:?}");
-        }
-        // And continuously (what keeps strata compact): neighbours on the
-        // grid stay neighbours, across the diagonals between the branches.
-        let at = |i: i32, j: i32| concentric_disk(Vec2::new(i as f32, j as f32) / k as f32);
-        for i in 0..k {
-            for j in 0..k {
-                let d = at(i, j);
-                let step = (at(i + 1, j) - d).length().max((at(i, j + 1) - d).length());
-                assert!(step < 4.0 / k as f32, "({i}, {j}): {step}");
-            }
-        }
-    }
-
-    #[test]
-    fn concentric_map_stays_in_the_disk() {
-        for i in 0..=10 {
-            for j in 0..=10 {
-                let d = concentric_disk(Vec2::new(i as f32 / 10.0, j as f32 / 10.0));
-                assert!(d.length() <= 1.0 + 1e-6);
-            }
-        }
-        assert!((concentric_disk(Vec2::new(1.0, 0.5)) - Vec2::X).length() < 1e-6);
     }
 }

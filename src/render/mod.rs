@@ -534,7 +534,7 @@ mod tests {
                Triangle { vertex0 -1 -1 0 vertex1 1 -1 0.5 vertex2 0 1 -0.5 } }";
         let scene = crate::format::parse_scene(src, std::path::Path::new("t.txt")).unwrap();
         let world = World::build(&scene, crate::world::BuildOptions::default());
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         (world, camera)
     }
 

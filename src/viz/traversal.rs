@@ -52,28 +52,28 @@ impl Structure {
     /// Builds the structure `kind` names over `world`'s bounded primitives;
     /// `None` for brute force, which walks nothing.
     pub fn build(world: &World, kind: AccelKind) -> Option<Structure> {
-        let ids: Vec<u32> = (0..world.prims.len() as u32)
-            .filter(|i| !world.unbounded.contains(i))
+        let ids: Vec<u32> = (0..world.prims().len() as u32)
+            .filter(|i| !world.unbounded().contains(i))
             .collect();
         Some(match kind {
             AccelKind::None => return None,
-            AccelKind::Grid { res } => Structure::Grid(Grid::new(&world.prims, ids, res)),
-            AccelKind::Octree => Structure::Octree(Octree::new(&world.prims, ids)),
+            AccelKind::Grid { res } => Structure::Grid(Grid::new(world.prims(), ids, res)),
+            AccelKind::Octree => Structure::Octree(Octree::new(world.prims(), ids)),
             AccelKind::OctreeInner => {
-                Structure::Octree(Octree::with_storage(&world.prims, ids, Storage::Inner))
+                Structure::Octree(Octree::with_storage(world.prims(), ids, Storage::Inner))
             }
-            AccelKind::Bvh(split) => Structure::Bvh(Bvh::new(&world.prims, ids, split)),
+            AccelKind::Bvh(split) => Structure::Bvh(Bvh::new(world.prims(), ids, split)),
             AccelKind::NestedGrid { threshold, depth } => {
-                Structure::NestedGrid(NestedGrid::new(&world.prims, ids, threshold, depth))
+                Structure::NestedGrid(NestedGrid::new(world.prims(), ids, threshold, depth))
             }
             AccelKind::BvhHierarchy => {
                 // Built from the world's recorded scene tree, as the renderer's.
-                Structure::Hierarchy(HierarchyBvh::new(&world.prims, ids, &world.scene_tree))
+                Structure::Hierarchy(HierarchyBvh::new(world.prims(), ids, world.scene_tree()))
             }
             // The fast BVH records no walk (its loops are kept free of
             // observers); its teaching twin, the binary SAH BVH, is shown.
             AccelKind::Bvh4 => {
-                Structure::Bvh(Bvh::new(&world.prims, ids, crate::accel::Split::Sah))
+                Structure::Bvh(Bvh::new(world.prims(), ids, crate::accel::Split::Sah))
             }
         })
     }
@@ -83,7 +83,7 @@ impl Structure {
     pub fn trace(&self, world: &World, ray: &Ray, tmin: f32) -> (Option<PrimHit>, Vec<Visit>) {
         let mut visits = Vec::new();
         let c = &mut Counters::default();
-        let prims = &world.prims;
+        let prims = world.prims();
         let hit = match self {
             Structure::Grid(g) => {
                 g.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |cell| {

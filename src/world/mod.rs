@@ -68,41 +68,117 @@ impl Hit {
 /// all in rendering space (see the module documentation).
 pub struct World {
     /// All primitives.
-    pub prims: Vec<Primitive>,
+    prims: Vec<Primitive>,
     /// Aggregate over the bounded primitives.
-    pub accel: Box<dyn Aggregate>,
+    accel: Box<dyn Aggregate>,
     /// Primitives with infinite bounds (planes), tested on every ray.
-    pub unbounded: Vec<u32>,
+    unbounded: Vec<u32>,
     /// Material table (the scene's, plus a default for shapes that had none),
     /// for lookups at rendering-space points: texture matrices have the
     /// translation back to world space folded in (in f64), so a texture
     /// stays exactly where the scene put it.
-    pub materials: Vec<Material>,
+    materials: Vec<Material>,
     /// The same table with the scene's own texture matrices, for lookups at
     /// object-space points (`TextureSpace::Object`).
-    pub object_materials: Vec<Material>,
+    object_materials: Vec<Material>,
     /// Lights (point lights moved into rendering space).
-    pub lights: Vec<Light>,
+    lights: Vec<Light>,
     /// The scene's camera in rendering space (its centre at the origin):
     /// build the [`crate::render::CameraModel`] for this world from it.
-    pub camera: Camera,
+    camera: Camera,
     /// Where the rendering-space origin lies in world space.
-    pub origin: DVec3,
+    origin: DVec3,
     /// Background and ambient light.
-    pub background: Background,
+    background: Background,
     /// Rendering-space-to-object matrices, indexed by [`Primitive::instance`];
     /// entry 0 is the rendering-to-world translation.
-    pub object_from_world: Vec<Mat4>,
+    object_from_world: Vec<Mat4>,
     /// Milliseconds spent building the aggregate.
-    pub build_ms: f64,
+    build_ms: f64,
     /// The scene's object tree over `prims` (groups, transforms, shapes), as
     /// flattening met it: what `bvh-hierarchy` is built from.
-    pub scene_tree: crate::accel::SceneTree,
+    scene_tree: crate::accel::SceneTree,
     /// What of `lights` is the same at every shading point, prepared once.
     prepared_lights: lights::PreparedLights,
 }
 
 impl World {
+    /// All primitives.
+    #[inline]
+    pub fn prims(&self) -> &[Primitive] {
+        &self.prims
+    }
+
+    /// The aggregate over the bounded primitives.
+    #[inline]
+    pub fn accel(&self) -> &dyn Aggregate {
+        &*self.accel
+    }
+
+    /// Indices of the primitives with infinite bounds (planes), tested on
+    /// every ray.
+    #[inline]
+    pub fn unbounded(&self) -> &[u32] {
+        &self.unbounded
+    }
+
+    /// The material table for lookups at rendering-space points (see the
+    /// field's documentation: texture matrices map rendering space).
+    #[inline]
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// The material table with the scene's own texture matrices, for
+    /// lookups at object-space points.
+    #[inline]
+    pub fn object_materials(&self) -> &[Material] {
+        &self.object_materials
+    }
+
+    /// The scene's lights in rendering space.
+    #[inline]
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// The scene's camera in rendering space (its centre at the origin):
+    /// build the [`crate::render::CameraModel`] for this world from it.
+    #[inline]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Where the rendering-space origin lies in world space.
+    #[inline]
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+
+    /// Background colour and ambient light.
+    #[inline]
+    pub fn background(&self) -> &Background {
+        &self.background
+    }
+
+    /// Rendering-space-to-object matrices, indexed by
+    /// [`Primitive::instance`]; entry 0 is the rendering-to-world
+    /// translation.
+    #[inline]
+    pub fn object_from_world(&self) -> &[Mat4] {
+        &self.object_from_world
+    }
+
+    /// Milliseconds spent building the aggregate.
+    pub fn build_ms(&self) -> f64 {
+        self.build_ms
+    }
+
+    /// The scene's object tree over the primitives, as flattening met it.
+    pub fn scene_tree(&self) -> &crate::accel::SceneTree {
+        &self.scene_tree
+    }
+
     /// Closest hit with `tmin < t < tmax`.
     pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> Option<Hit> {
         let mut best = (self.accel).intersect_barycentric(&self.prims, ray, tmin, tmax, c);
@@ -134,13 +210,12 @@ impl World {
         })
     }
 
-    /// What the world's light number `index` (`light`, i.e.
-    /// `&self.lights[index]`) sends to point `p`: `light::incident(light,
-    /// p)`, with a directional light's normalised direction prepared once
-    /// per world (and re-done should the light have changed since).
+    /// What the world's light number `index` sends to point `p`:
+    /// `light::incident(&self.lights()[index], p)`, with a directional
+    /// light's normalised direction prepared once with the world.
     #[inline]
-    pub fn incident(&self, index: usize, light: &Light, p: Vec3) -> crate::light::Incident {
-        self.prepared_lights.incident(index, light, p)
+    pub fn incident(&self, index: usize, p: Vec3) -> crate::light::Incident {
+        self.prepared_lights.incident(index, &self.lights[index], p)
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.

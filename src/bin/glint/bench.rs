@@ -208,8 +208,8 @@ fn measure(
         let t = Instant::now();
         let world = World::build(scene, BuildOptions { accel, flatten });
         builds.push(t.elapsed().as_secs_f64() * 1e3);
-        memory = world.accel.memory_bytes();
-        let cam = CameraModel::new(&world.camera);
+        memory = world.accel().memory_bytes();
+        let cam = CameraModel::new(world.camera());
         let t = Instant::now();
         let (_, c) = render(&world, &cam, integrator, (size, size), PixelOffset::CENTER);
         renders.push(t.elapsed().as_secs_f64() * 1e3);
