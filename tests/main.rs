@@ -21,6 +21,7 @@ mod hostile;
 mod malformed;
 mod moved_scenes;
 mod numerics;
+mod path_tracing;
 mod physics;
 mod pieces;
 mod ray_tree;
