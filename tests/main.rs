@@ -23,6 +23,7 @@ mod layers;
 mod malformed;
 mod moved_scenes;
 mod numerics;
+mod path_tracing;
 mod physics;
 mod pieces;
 mod raytree_cli;

@@ -252,6 +252,7 @@ fn own_whitted() -> Scene {
                 transparent: Vec3::splat(0.9),
                 ior: 1.5,
                 glossiness: 0.0,
+                emission: Vec3::ZERO,
             }),
         ],
         root: Node::Group(vec![

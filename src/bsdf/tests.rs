@@ -327,6 +327,7 @@ fn course_materials_never_reflect_more_than_they_receive() {
         transparent: Vec3::splat(t),
         ior: 1.5,
         glossiness: g,
+        emission: Vec3::ZERO,
     };
     let materials = [
         phong(1.0, 0.0, 1.0, 0.0, 0.0, 0.0),

@@ -147,9 +147,9 @@ struct RenderArgs {
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
     size: Vec<u32>,
-    /// Maximum number of reflection/refraction bounces (0 to 64).
-    #[arg(long, default_value_t = 5)]
-    bounces: u32,
+    /// Maximum number of reflection/refraction bounces (0 to 64; default 5). With --integrator path: scattering events per path (default 64; 0 shows emitters only, 1 direct light).
+    #[arg(long)]
+    bounces: Option<u32>,
     /// Prune ray-tree branches contributing less than this (finite, >= 0).
     #[arg(long, default_value_t = 0.01)]
     weight: f32,
@@ -252,7 +252,7 @@ struct RenderArgs {
     /// Ambient-occlusion rays per shaded point (overrides the scene's AmbientOcclusion).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
     ao_samples: Option<u32>,
-    /// What to compute: whitted (shaded image) or ao (grey ambient-occlusion image).
+    /// What to compute: whitted (shaded image), ao (grey ambient-occlusion image) or path (path tracing with light sampling and MIS; see docs/path-tracing.md).
     #[arg(long, value_enum, default_value_t = IntegratorName::Whitted)]
     integrator: IntegratorName,
 }
@@ -262,6 +262,7 @@ struct RenderArgs {
 enum IntegratorName {
     Whitted,
     Ao,
+    Path,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -432,6 +433,12 @@ fn render(a: RenderArgs) -> ExitCode {
         ao: a.ao_samples,
     };
     job.ao_image = a.integrator == IntegratorName::Ao;
+    if a.integrator == IntegratorName::Path {
+        job.path = Some(glint::integrator::PathSettings {
+            max_bounces: job.integrator.bounces,
+            ..Default::default()
+        });
+    }
     job.cost_image = a.cost_image;
     let size = (job.width, job.height);
     let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
@@ -560,7 +567,12 @@ fn check_bench(size: u32, runs: usize, none_limit: f64) -> Result<(), String> {
 /// The numeric render flags, in their documented ranges ([`limits`]):
 /// `--weight nan` rendered before issue 15, `--threads 100000` hung.
 fn check_numbers(a: &RenderArgs, job: &mut Job) -> Result<(), String> {
-    job.integrator.bounces = limits::int_in("--bounces", a.bounces, 0, limits::MAX_BOUNCES)?;
+    let default_bounces = match a.integrator {
+        IntegratorName::Path => glint::integrator::PathSettings::default().max_bounces,
+        _ => 5,
+    };
+    let bounces = a.bounces.unwrap_or(default_bounces);
+    job.integrator.bounces = limits::int_in("--bounces", bounces, 0, limits::MAX_BOUNCES)?;
     job.integrator.weight_cutoff = limits::finite_in("--weight", a.weight, 0.0, f32::MAX)?;
     if let Some(n) = a.threads {
         let (n, note) = limits::threads("--threads", n, limits::cores())?;
