@@ -93,6 +93,29 @@ impl Scene {
         }
     }
 
+    /// Gives every mesh without vertex normals angle-weighted ones
+    /// ([`Mesh::with_computed_normals`]), so all meshes are shaded smooth;
+    /// a mesh shared by several nodes is computed once and stays shared.
+    pub fn smooth_meshes(&mut self) {
+        // (original, smooth) pairs; the originals are kept alive so that
+        // pointer comparison stays meaningful.
+        let mut done: Vec<(Arc<Mesh>, Arc<Mesh>)> = Vec::new();
+        self.root.for_each_mesh(&mut |mesh: &mut Arc<Mesh>| {
+            if !mesh.normals.is_empty() {
+                return;
+            }
+            let smooth = match done.iter().find(|(k, _)| Arc::ptr_eq(k, mesh)) {
+                Some((_, m)) => Arc::clone(m),
+                None => {
+                    let m = Arc::new(mesh.with_computed_normals());
+                    done.push((Arc::clone(mesh), Arc::clone(&m)));
+                    m
+                }
+            };
+            *mesh = smooth;
+        });
+    }
+
     /// Counts of what the scene holds, for `glint info` and statistics.
     pub fn summary(&self) -> Summary {
         let mut s = Summary {

@@ -137,6 +137,19 @@ impl Node {
         }
     }
 
+    /// Calls `f` on every mesh of the subtree.
+    pub(super) fn for_each_mesh(&mut self, f: &mut impl FnMut(&mut Arc<Mesh>)) {
+        match self {
+            Node::Group(children) => children.iter_mut().for_each(|c| c.for_each_mesh(f)),
+            Node::Transform { child, .. } | Node::Moving { child, .. } => child.for_each_mesh(f),
+            Node::Shape {
+                shape: Shape::Mesh(m),
+                ..
+            } => f(m),
+            Node::Shape { .. } => {}
+        }
+    }
+
     pub(super) fn count(&self, s: &mut Summary) {
         match self {
             Node::Group(children) => {
