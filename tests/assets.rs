@@ -11,7 +11,7 @@
 
 use glint::format::load_scene;
 use glint::integrator::Whitted;
-use glint::math::Vec3;
+use glint::math::{Aabb, Vec3};
 use glint::render::{render, CameraModel, PixelOffset};
 use glint::scene::{Background, Camera, Light, Material, Mesh, Node, Phong, Scene, Shape};
 use glint::world::{BuildOptions, World};
@@ -117,31 +117,134 @@ fn ply_binary(m: &Mesh, big: bool) -> Vec<u8> {
     b
 }
 
+/// A scene showing the mesh file NAME under a rotation, with shadows.
+const SCENE: &str = "
+PerspectiveCamera { center 0.5 1 4 direction -0.5 -1 -4 up 0 1 0 angle 40 }
+Lights { numLights 2
+    DirectionalLight { direction -0.5 -1 -0.6 color 0.7 0.7 0.7 }
+    PointLight { position 2 3 2 color 0.5 0.5 0.5 attenuation 1 0 0 } }
+Background { color 0.1 0.1 0.2 ambientLight 0.2 0.2 0.2 }
+Materials { numMaterials 1 PhongMaterial { diffuseColor 0.8 0.6 0.4
+    specularColor 0.3 0.3 0.3 exponent 20 } }
+Group { numObjects 2
+    MaterialIndex 0
+    Transform { YRotate 30 TriangleMesh { obj_file NAME } }
+    Plane { normal 0 1 0 offset -1.2 } }
+";
+
+/// The binary buffer of a glTF holding `m`: positions, then u32 indices.
+fn gltf_buffer(m: &Mesh) -> Vec<u8> {
+    let mut b = Vec::new();
+    for p in &m.positions {
+        p.to_array().iter().for_each(|x| b.extend(x.to_le_bytes()));
+    }
+    for t in &m.triangles {
+        t.iter().for_each(|i| b.extend(i.to_le_bytes()));
+    }
+    b
+}
+
+/// A glTF document holding `m` under a node that scales by 1 (an identity
+/// transform written out), its buffer at `uri` (`None`: the GLB chunk).
+pub fn gltf_json(m: &Mesh, uri: Option<&str>) -> String {
+    let nv = m.positions.len();
+    let b = Aabb::from_points(m.positions.iter().copied());
+    let uri = uri.map_or(String::new(), |u| format!(r#""uri": "{u}", "#));
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+ "nodes": [{{"mesh": 0, "scale": [1, 1, 1]}}],
+ "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+ "buffers": [{{{uri}"byteLength": {len}}}],
+ "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": {pl}}},
+                 {{"buffer": 0, "byteOffset": {pl}, "byteLength": {il}}}],
+ "accessors": [{{"bufferView": 0, "componentType": 5126, "count": {nv}, "type": "VEC3",
+                 "min": [{}, {}, {}], "max": [{}, {}, {}]}},
+               {{"bufferView": 1, "componentType": 5125, "count": {ni}, "type": "SCALAR"}}]}}"#,
+        b.min.x,
+        b.min.y,
+        b.min.z,
+        b.max.x,
+        b.max.y,
+        b.max.z,
+        len = nv * 12 + m.triangles.len() * 12,
+        pl = nv * 12,
+        il = m.triangles.len() * 12,
+        ni = m.triangles.len() * 3,
+    )
+}
+
+/// A GLB container: the JSON chunk and the binary chunk, padded to 4.
+pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut j = json.as_bytes().to_vec();
+    while !j.len().is_multiple_of(4) {
+        j.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + j.len() + 8 + bin.len();
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((j.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(j);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
 #[test]
 fn the_same_mesh_in_every_format_renders_the_same_image() {
+    use base64::Engine as _;
     let dir = tempfile::tempdir().unwrap();
     let mesh = lumpy(24);
+    let bin = gltf_buffer(&mesh);
+    let data_uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    std::fs::write(dir.path().join("m.bin"), &bin).unwrap();
     let files: Vec<(&str, Vec<u8>)> = vec![
         ("m.obj", obj_text(&mesh).into_bytes()),
         ("ascii.ply", ply_ascii(&mesh)),
         ("le.ply", ply_binary(&mesh, false)),
         ("be.ply", ply_binary(&mesh, true)),
+        ("file.gltf", gltf_json(&mesh, Some("m.bin")).into_bytes()),
+        ("data.gltf", gltf_json(&mesh, Some(&data_uri)).into_bytes()),
+        ("m.glb", glb(&gltf_json(&mesh, None), &bin)),
     ];
     let mut images = Vec::new();
     for (name, bytes) in &files {
         let path = dir.path().join(name);
         std::fs::write(&path, bytes).unwrap();
-        let scene = load_scene(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
-        images.push((name, frame(&scene, 96, 80)));
+        // Every format as the mesh of one scene file (a glTF alone brings
+        // its own material and light), and the bare meshes framed alone.
+        let scene_file = dir.path().join(format!("{name}.txt"));
+        std::fs::write(&scene_file, SCENE.replace("NAME", name)).unwrap();
+        let scene = load_scene(&scene_file).unwrap_or_else(|e| panic!("{name}: {e}"));
+        images.push((format!("{name} in a scene"), frame(&scene, 96, 80)));
     }
-    let (first, reference) = &images[0];
-    // Not a blank image: the mesh covers a good part of the frame.
-    let background = reference[0];
-    let covered = reference.iter().filter(|&&c| c != background).count();
-    assert!(covered > 96 * 80 / 5, "{covered} pixels show the mesh");
-    for (name, img) in &images[1..] {
-        let differ = img.iter().zip(reference).filter(|(a, b)| a != b).count();
-        assert_eq!(differ, 0, "{name} differs from {first} in {differ} pixels");
+    let mut bare = Vec::new();
+    for (name, _) in &files[..4] {
+        let scene = load_scene(&dir.path().join(name)).unwrap();
+        bare.push((name.to_string(), frame(&scene, 96, 80)));
+    }
+    for images in [images, bare] {
+        let (first, reference) = &images[0];
+        // Not a blank image: the mesh covers a good part of the frame.
+        let background = reference[0];
+        let covered = reference.iter().filter(|&&c| c != background).count();
+        assert!(
+            covered > 96 * 80 / 10,
+            "{first}: {covered} pixels show the mesh"
+        );
+        for (name, img) in &images[1..] {
+            let differ = img.iter().zip(reference).filter(|(a, b)| a != b).count();
+            assert_eq!(differ, 0, "{name} differs from {first} in {differ} pixels");
+        }
     }
 }
 

@@ -9,6 +9,7 @@ mod diagnostic;
 mod input;
 mod mit6837;
 
+pub mod gltf;
 pub mod obj;
 mod obj_lean;
 pub mod ply;
@@ -31,6 +32,9 @@ pub fn load_scene(path: &Path) -> Result<Scene, ParseError> {
 /// [`load_scene`], and every file it read: the scene file first, then the
 /// meshes it names (so a render can refuse to overwrite any of them).
 pub fn load_scene_files(path: &Path) -> Result<(Scene, Vec<PathBuf>), ParseError> {
+    if MeshKind::of(path) == Some(MeshKind::Gltf) {
+        return gltf::load_gltf_files(path);
+    }
     if let Some(kind) = MeshKind::of(path) {
         let mesh = load_mesh_file(path).map_err(|e| match e {
             obj::LoadError::Io(e) => ParseError::unreadable(path, &e, kind.expected()),
@@ -53,6 +57,9 @@ pub enum MeshKind {
     Obj,
     /// Stanford PLY (`.ply`).
     Ply,
+    /// glTF 2.0 (`.gltf`, `.glb`): a whole scene; as a mesh, its triangles
+    /// with every node's transform applied.
+    Gltf,
 }
 
 impl MeshKind {
@@ -62,6 +69,7 @@ impl MeshKind {
         match ext.as_str() {
             "obj" => Some(MeshKind::Obj),
             "ply" => Some(MeshKind::Ply),
+            "gltf" | "glb" => Some(MeshKind::Gltf),
             _ => None,
         }
     }
@@ -70,6 +78,7 @@ impl MeshKind {
         match self {
             MeshKind::Obj => "a readable OBJ file",
             MeshKind::Ply => "a readable PLY file",
+            MeshKind::Gltf => "a readable glTF file",
         }
     }
 }
@@ -82,6 +91,9 @@ pub(crate) fn load_mesh_file(path: &Path) -> Result<scene::Mesh, obj::LoadError>
             let bytes = input::read_input(path).map_err(obj::LoadError::Io)?;
             ply::parse_ply(&bytes, path).map_err(obj::LoadError::Parse)
         }
+        Some(MeshKind::Gltf) => gltf::load_gltf(path)
+            .map(|s| gltf::flatten_to_mesh(&s))
+            .map_err(obj::LoadError::Parse),
         _ => obj::load(path),
     }
 }

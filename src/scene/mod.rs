@@ -57,9 +57,19 @@ pub struct Scene {
 impl Scene {
     /// A scene showing `mesh` alone: a perspective camera (45°) looking at
     /// the mesh's bounding sphere from above and to the right, one white
-    /// directional light, a warm grey material. Used for bare OBJ input.
+    /// directional light, a warm grey material. Used for bare mesh input.
     pub fn for_mesh(mesh: Mesh) -> Scene {
-        let b = Aabb::from_points(mesh.positions.iter().copied());
+        let mut s = Scene::for_bounds(Aabb::from_points(mesh.positions.iter().copied()));
+        s.root = Node::Shape {
+            shape: Shape::Mesh(Arc::new(mesh)),
+            material: Some(0),
+        };
+        s
+    }
+
+    /// [`Scene::for_mesh`]'s camera, light, background and material for
+    /// anything within `b`, with an empty tree.
+    pub fn for_bounds(b: Aabb) -> Scene {
         let (c, r) = if b.is_empty() {
             (Vec3::ZERO, 1.0)
         } else {
@@ -85,10 +95,7 @@ impl Scene {
                 diffuse: Vec3::new(0.8, 0.7, 0.6),
                 ..Phong::default()
             })],
-            root: Node::Shape {
-                shape: Shape::Mesh(Arc::new(mesh)),
-                material: Some(0),
-            },
+            root: Node::Group(Vec::new()),
             effects: Effects::default(),
         }
     }
