@@ -14,8 +14,9 @@ use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
     render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
-    Sampler, SamplerKind, Settings, TILE_SIZE,
+    Settings, TILE_SIZE,
 };
+use crate::sampler::{Sampler, SamplerKind};
 use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
 use crate::viz::draw::Canvas;
@@ -208,7 +209,9 @@ pub struct Report {
     pub render: Duration,
     /// Number of primitives in the world.
     pub primitives: usize,
-    /// Bounds of the world's bounded primitives (planes excluded).
+    /// Bounds of the world's bounded primitives (planes excluded), in world
+    /// space (the scene file's coordinates, not the camera-centred rendering
+    /// space).
     pub bounds: crate::math::Aabb,
     /// The rendered planes.
     pub frame: Frame,
@@ -715,13 +718,13 @@ impl Job {
         let report = Report {
             scene,
             counters,
-            accel: world.accel.describe(),
-            build_ms: world.build_ms,
+            accel: world.accel().describe(),
+            build_ms: world.build_ms(),
             load_ms,
             world_ms,
             render: render_time,
-            primitives: world.prims.len(),
-            bounds: world.bounds(),
+            primitives: world.prims().len(),
+            bounds: world_space(world.bounds(), world.origin()),
             frame,
             settings,
         };
@@ -990,6 +993,19 @@ pub fn run_guarded(
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(body)) {
         Ok(code) => code,
         Err(_) => std::process::ExitCode::from(1),
+    }
+}
+
+/// `b` (rendering space) moved back to world space by the rendering
+/// origin `o`; an empty box stays empty.
+fn world_space(b: crate::math::Aabb, o: glam::DVec3) -> crate::math::Aabb {
+    if b.is_empty() {
+        return b;
+    }
+    let shift = |v: crate::math::Vec3| (v.as_dvec3() + o).as_vec3();
+    crate::math::Aabb {
+        min: shift(b.min),
+        max: shift(b.max),
     }
 }
 

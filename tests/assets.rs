@@ -13,7 +13,9 @@ use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::math::{Aabb, Vec3};
 use glint::render::{render, CameraModel, PixelOffset};
-use glint::scene::{Background, Camera, Light, Material, Mesh, Node, Phong, Scene, Shape};
+use glint::scene::{
+    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, ShapeDesc as Shape,
+};
 use glint::world::{BuildOptions, World};
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -21,7 +23,7 @@ use std::sync::Arc;
 /// The linear colour image of `scene` (pixel centres), `w`x`h`.
 fn frame(scene: &Scene, w: u32, h: u32) -> Vec<Vec3> {
     let world = World::build(scene, BuildOptions::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let integrator = Whitted {
         shadows: true,
         ..Whitted::default()

@@ -621,7 +621,7 @@ fn exponent_notation_is_accepted() {
     if let glint::scene::Node::Group(children) = &scene.root {
         for c in children {
             if let glint::scene::Node::Shape {
-                shape: glint::scene::Shape::Sphere { radius, .. },
+                shape: glint::scene::ShapeDesc::Sphere { radius, .. },
                 ..
             } = c
             {

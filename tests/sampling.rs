@@ -10,9 +10,9 @@ use glint::integrator::Whitted;
 use glint::math::Vec3;
 use glint::render::legacy::render_rows;
 use glint::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, GridLayout, PixelOffset, Sampler,
-    SamplerKind, Settings,
+    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Settings,
 };
+use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::scene::{Node, Scene};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -20,7 +20,7 @@ use std::path::Path;
 
 fn world_of(scene: &Scene) -> (World, CameraModel) {
     let world = World::build(scene, BuildOptions::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     (world, camera)
 }
 
@@ -255,7 +255,7 @@ fn adaptive_traces_only_the_corners_of_a_flat_image() {
     let (f, c) = render(&world, &cam, &whitted(), &s);
     assert_eq!(c.primary, ((w + 1) * (h + 1)) as u64);
     assert!(f.samples.iter().all(|&n| n == 4));
-    assert!(f.color.iter().all(|&p| p == world.background.color));
+    assert!(f.color.iter().all(|&p| p == world.background().color));
 }
 
 /// On scene7_01's edges adaptive subdivision reaches the RMSE of uniform

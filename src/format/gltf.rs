@@ -47,7 +47,9 @@
 
 use super::diagnostic::{quote, ParseError};
 use crate::math::{Aabb, Vec3};
-use crate::scene::{Background, Camera, Light, Material, Mesh, Node, Phong, Scene, Shape};
+use crate::scene::{
+    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, ShapeDesc as Shape,
+};
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;

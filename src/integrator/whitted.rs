@@ -113,7 +113,7 @@ impl Whitted {
             hit.map(|h| h.normal),
         );
         match hit {
-            None => (world.background.color, None),
+            None => (world.background().color, None),
             Some(h) => (
                 self.shade(world, ray, &h, depth, weight, stream, c, obs),
                 Some(h),
@@ -151,7 +151,7 @@ impl Whitted {
         let p = hit.point;
         let m = self.material_at(world, hit);
 
-        let mut color = world.background.ambient * m.diffuse;
+        let mut color = world.background().ambient * m.diffuse;
         if let Some(ao) = &self.ambient_occlusion {
             if color != Vec3::ZERO {
                 let from = hit.surface_point();
@@ -160,13 +160,13 @@ impl Whitted {
         }
         // The lights' shadow rays share their offset origins (`Spawn`).
         let from = &mut Spawn::leaving(hit.surface_point(), hit.prim);
-        for (i, light) in world.lights.iter().enumerate() {
+        for (i, light) in world.lights().iter().enumerate() {
             if !is_delta(light) {
                 color +=
                     self.area_light(world, ray, from, light, &m, n, ng, d, depth, stream, c, obs);
                 continue;
             }
-            let inc = world.incident(i, light, p);
+            let inc = world.incident(i, p);
             color += self.lit(world, ray, from, light, &inc, &m, n, ng, d, depth, c, obs);
         }
 
@@ -313,11 +313,11 @@ impl Whitted {
     /// its object's space to the scene's own matrices.
     fn material_at(&self, world: &World, hit: &Hit) -> crate::scene::Phong {
         match self.texture_space {
-            TextureSpace::World => eval(&world.materials, hit.material, hit.point),
+            TextureSpace::World => eval(world.materials(), hit.material, hit.point),
             TextureSpace::Object => eval(
-                &world.object_materials,
+                world.object_materials(),
                 hit.material,
-                world.object_from_world[hit.instance as usize].transform_point3(hit.point),
+                world.object_from_world()[hit.instance as usize].transform_point3(hit.point),
             ),
         }
     }

@@ -12,7 +12,7 @@ pub use camera::Camera;
 pub use effects::{AmbientOcclusion, EffectSamples, Effects, Lens};
 pub use light::{AreaShape, Light};
 pub use material::{Material, Phong, TextureKind};
-pub use node::{Mesh, Node, Shape};
+pub use node::{Mesh, Node, ShapeDesc};
 
 use crate::math::{Aabb, Vec3};
 use std::sync::Arc;
@@ -61,7 +61,7 @@ impl Scene {
     pub fn for_mesh(mesh: Mesh) -> Scene {
         let mut s = Scene::for_bounds(Aabb::from_points(mesh.positions.iter().copied()));
         s.root = Node::Shape {
-            shape: Shape::Mesh(Arc::new(mesh)),
+            shape: ShapeDesc::Mesh(Arc::new(mesh)),
             material: Some(0),
         };
         s

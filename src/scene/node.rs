@@ -49,9 +49,10 @@ impl Mesh {
     }
 }
 
-/// A geometric shape in its own (object) space.
+/// A geometric shape in its own (object) space, as the scene describes it;
+/// `world::build` turns it into the renderable [`crate::shape::Shape`].
 #[derive(Clone, Debug, PartialEq)]
-pub enum Shape {
+pub enum ShapeDesc {
     /// Sphere.
     Sphere {
         /// Centre.
@@ -96,7 +97,7 @@ pub enum Node {
     /// file gave no `MaterialIndex` before it.
     Shape {
         /// The geometry.
-        shape: Shape,
+        shape: ShapeDesc,
         /// Index into [`super::Scene::materials`].
         material: Option<usize>,
     },
@@ -121,16 +122,18 @@ impl Node {
                 motion.swept_bounds(&child.bounds(&Mat4::IDENTITY), m)
             }
             Node::Shape { shape, .. } => match shape {
-                Shape::Sphere { center, radius } => Aabb::new(
+                ShapeDesc::Sphere { center, radius } => Aabb::new(
                     *center - Vec3::splat(*radius),
                     *center + Vec3::splat(*radius),
                 )
                 .transformed(m),
-                Shape::Plane { normal, offset } => crate::shape::Plane::new(*normal, *offset)
+                ShapeDesc::Plane { normal, offset } => crate::shape::Plane::new(*normal, *offset)
                     .and_then(|p| p.transformed(&m.as_dmat4()))
                     .map_or(Aabb::EMPTY, |p| p.bounds()),
-                Shape::Triangle(v) => Aabb::from_points(v.iter().map(|&p| m.transform_point3(p))),
-                Shape::Mesh(mesh) => {
+                ShapeDesc::Triangle(v) => {
+                    Aabb::from_points(v.iter().map(|&p| m.transform_point3(p)))
+                }
+                ShapeDesc::Mesh(mesh) => {
                     Aabb::from_points(mesh.positions.iter().map(|&p| m.transform_point3(p)))
                 }
             },
@@ -143,7 +146,7 @@ impl Node {
             Node::Group(children) => children.iter_mut().for_each(|c| c.for_each_mesh(f)),
             Node::Transform { child, .. } | Node::Moving { child, .. } => child.for_each_mesh(f),
             Node::Shape {
-                shape: Shape::Mesh(m),
+                shape: ShapeDesc::Mesh(m),
                 ..
             } => f(m),
             Node::Shape { .. } => {}
@@ -161,10 +164,10 @@ impl Node {
                 child.count(s);
             }
             Node::Shape { shape, .. } => match shape {
-                Shape::Sphere { .. } => s.spheres += 1,
-                Shape::Plane { .. } => s.planes += 1,
-                Shape::Triangle(_) => s.triangles += 1,
-                Shape::Mesh(m) => {
+                ShapeDesc::Sphere { .. } => s.spheres += 1,
+                ShapeDesc::Plane { .. } => s.planes += 1,
+                ShapeDesc::Triangle(_) => s.triangles += 1,
+                ShapeDesc::Mesh(m) => {
                     s.meshes += 1;
                     s.triangles += m.triangles.len();
                 }
@@ -186,7 +189,7 @@ mod tests {
 
     fn tri() -> Node {
         Node::Shape {
-            shape: Shape::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
+            shape: ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
             material: None,
         }
     }
@@ -194,7 +197,7 @@ mod tests {
     #[test]
     fn group_is_the_union() {
         let s = Node::Shape {
-            shape: Shape::Sphere {
+            shape: ShapeDesc::Sphere {
                 center: Vec3::new(5.0, 0.0, 0.0),
                 radius: 1.0,
             },
@@ -218,7 +221,7 @@ mod tests {
     #[test]
     fn transformed_sphere_uses_the_8_corners() {
         let s = Node::Shape {
-            shape: Shape::Sphere {
+            shape: ShapeDesc::Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,
             },

@@ -41,7 +41,7 @@ pub fn run(args: &LoopArgs) -> Result<(), String> {
     for path in &args.scenes {
         let scene = load_scene(path).map_err(|e| e.render())?;
         let world = World::build(&scene, BuildOptions::default());
-        let cam = CameraModel::new(&world.camera);
+        let cam = CameraModel::new(world.camera());
         let size = (args.size, args.size);
         let old = || render_rows(&world, &cam, &integrator, size, PixelOffset::CENTER);
         let new = || render(&world, &cam, &integrator, size, PixelOffset::CENTER);

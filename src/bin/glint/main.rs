@@ -6,7 +6,8 @@ use glint::format::load_scene;
 use glint::job::Job;
 use glint::limits;
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, Sampler, SamplerKind};
+use glint::render::{Adaptive, Filter};
+use glint::sampler::{Sampler, SamplerKind};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -28,6 +29,7 @@ mod bench_rays;
 mod deep;
 mod merge;
 mod raytree;
+mod serve;
 mod structure;
 mod traverse;
 
@@ -64,7 +66,7 @@ enum Command {
     },
     /// Time the tile render loop against the old row loop at 1 sample per pixel.
     BenchLoop {
-        /// Scene files (default: three course scenes from ../shared).
+        /// Scene files (default: three course scenes from $GLINT_SHARED or ../shared; exits 2 without them).
         scenes: Vec<PathBuf>,
         /// Square image size.
         #[arg(long, default_value_t = 400)]
@@ -84,9 +86,11 @@ enum Command {
     Structure(structure::StructureArgs),
     /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
     Merge(merge::MergeArgs),
+    /// Serve the scene live in a browser on 127.0.0.1: progressive render, click a pixel for its ray tree.
+    Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
-        /// Scene file (MIT 6.837 format).
+        /// Scene file (MIT 6.837 format) or a bare .obj mesh.
         scene: PathBuf,
     },
 }
@@ -123,7 +127,12 @@ linear 32-bit values unclamped. An unsupported extension is refused before any w
 
 The eye ray of each pixel goes through the pixel's centre. The `raytracer` command, which \
 runs the course's command lines verbatim, uses the pixel's lower-left corner instead, the \
-course's convention, which its reference images match exactly.";
+course's convention, which its reference images match exactly.
+
+Conventions (docs/scene-format.md, \"Conventions\"): a pixel is diffuse colour x irradiance, with no \
+1/pi; a flat area light's power is shared by its two faces; an orthographic camera sees objects \
+behind its centre plane (rays start at t = -inf, as in the course), a perspective camera does not; \
+`aperture` is the lens radius and the focus is a plane at `focusDistance` along the view direction.";
 
 #[derive(Args)]
 struct RenderArgs {
@@ -156,8 +165,8 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: bvh4 (the fast default), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
-    #[arg(long, default_value = "bvh4")]
+    /// Accelerator: bvh8 (the fast default; bvh4 is an alias), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
+    #[arg(long, default_value = "bvh8")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
@@ -189,7 +198,7 @@ struct RenderArgs {
     /// Seed of the random samplers (changes the noise, not its statistics).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma).
+    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma, a round kernel; `raytracer -gaussian_filter` keeps the course's square kernel, also gaussian-square:SIGMA).
     #[arg(long, default_value = "box:0.5")]
     filter: Filter,
     /// Whitted's adaptive supersampling: split a pixel square where its corners differ by more than this (0..1).
@@ -276,9 +285,19 @@ fn real_main() -> ExitCode {
         Command::Info { scene } => info(scene),
         Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
+        Command::Serve(a) => serve::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
-                let dir = PathBuf::from("../shared/scenes/6837");
+                let shared = std::env::var_os("GLINT_SHARED")
+                    .map_or_else(|| PathBuf::from("../shared"), PathBuf::from);
+                let dir = shared.join("scenes/6837");
+                if !dir.is_dir() {
+                    eprintln!(
+                        "glint bench-loop: the default scenes are the course's, in {} (needs the course data: set GLINT_SHARED); or name scene files, e.g. glint bench-loop scenes/whitted.txt",
+                        dir.display()
+                    );
+                    return ExitCode::from(2);
+                }
                 [
                     "scene7_01_sphere_triangle.txt",
                     "scene4_14_faceted_gem.txt",

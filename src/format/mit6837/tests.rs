@@ -4,7 +4,9 @@
 use super::parse;
 use crate::format::ParseError;
 use crate::math::{Mat4, Vec3};
-use crate::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape, TextureKind};
+use crate::scene::{
+    Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc, TextureKind,
+};
 use std::path::Path;
 
 const CAMERA: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n";
@@ -18,7 +20,7 @@ fn error(src: &str) -> ParseError {
 }
 
 /// The `(shape, material)` leaves in file order.
-fn leaves(n: &Node, out: &mut Vec<(Shape, Option<usize>)>) {
+fn leaves(n: &Node, out: &mut Vec<(ShapeDesc, Option<usize>)>) {
     match n {
         Node::Group(c) => c.iter().for_each(|c| leaves(c, out)),
         Node::Transform { child, .. } | Node::Moving { child, .. } => leaves(child, out),
@@ -185,19 +187,19 @@ fn objects() {
     leaves(&s.root, &mut l);
     assert_eq!(
         l[0].0,
-        Shape::Sphere {
+        ShapeDesc::Sphere {
             center: Vec3::new(1.0, 2.0, 3.0),
             radius: 2.0
         }
     );
     assert_eq!(
         l[1].0,
-        Shape::Plane {
+        ShapeDesc::Plane {
             normal: Vec3::Y,
             offset: -1.0
         }
     );
-    assert_eq!(l[2].0, Shape::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]));
+    assert_eq!(l[2].0, ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]));
     let Node::Group(top) = &s.root else { panic!() };
     assert!(
         matches!(&top[3], Node::Transform { matrix, child } if *matrix == Mat4::from_translation(Vec3::X) && **child == Node::Group(vec![]))
@@ -463,7 +465,7 @@ fn meshes_used_twice_are_loaded_once() {
     let meshes: Vec<_> = l
         .iter()
         .filter_map(|(sh, _)| match sh {
-            Shape::Mesh(m) => Some(m.clone()),
+            ShapeDesc::Mesh(m) => Some(m.clone()),
             _ => None,
         })
         .collect();
