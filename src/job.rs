@@ -96,6 +96,8 @@ pub struct Job {
     /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
     /// the one `build.accel` asks for, if it is a grid.
     pub visualize_grid: Option<GridView>,
+    /// Shade every mesh smooth (`--smooth`): see [`Scene::smooth_meshes`].
+    pub smooth: bool,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -505,6 +507,7 @@ impl Job {
             ao_image: false,
             path: None,
             visualize_grid: None,
+            smooth: false,
         }
     }
 
@@ -571,7 +574,10 @@ impl Job {
             ));
         }
         let t_load = Instant::now();
-        let (scene, files) = load_scene_files(&self.input)?;
+        let (mut scene, files) = load_scene_files(&self.input)?;
+        if self.smooth {
+            scene.smooth_meshes();
+        }
         // The meshes are known now; nothing has been written yet.
         self.check_clashes(&files)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;

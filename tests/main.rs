@@ -12,6 +12,7 @@ mod common;
 mod accel_agree;
 mod accel_edges;
 mod animation;
+mod assets;
 mod cli;
 mod conventions;
 mod distribution;

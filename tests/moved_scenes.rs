@@ -339,6 +339,7 @@ fn own_mesh_room() -> Scene {
             [1, 3, 7],
             [1, 7, 5],
         ],
+        ..Mesh::default()
     };
     let floor = [
         Vec3::new(-6.0, 0.0, -6.0),

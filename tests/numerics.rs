@@ -162,6 +162,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
     let degenerate_mesh = Mesh {
         positions: vec![v(0.0, 0.0, 1.0), v(1.0, 1.0, 1.0), v(2.0, 2.0, 1.0)],
         triangles: vec![[0, 1, 2], [0, 0, 0], [1, 2, 1]],
+        ..Mesh::default()
     };
     out.push((
         "zero-area triangles",

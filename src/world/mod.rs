@@ -38,6 +38,11 @@ pub struct Hit {
     /// Unit geometric normal (the shape's outward/front side, not flipped
     /// towards the ray).
     pub normal: Vec3,
+    /// Unit shading normal: on a smooth-shaded triangle the vertex normals
+    /// interpolated at the hit, turned to `normal`'s side; elsewhere
+    /// exactly `normal`. Light and reflection use it; rays are spawned by
+    /// `normal` (see `integrator::whitted`).
+    pub shading_normal: Vec3,
     /// Primitive index.
     pub prim: u32,
     /// Material index.
@@ -104,6 +109,11 @@ pub struct World {
     /// Indices of the area lights in `sources`: surfaces a ray can hit,
     /// kept out of the aggregate (the Whitted tree never sees them).
     emitters: Vec<u32>,
+    /// Vertex normals of smooth-shaded triangles by primitive index, each
+    /// matching its triangle's vertex order (zero for a flat primitive);
+    /// empty when every triangle is flat, so flat scenes pay one test of
+    /// an empty vector per closest hit.
+    vertex_normals: Vec<[Vec3; 3]>,
 }
 
 impl World {
@@ -202,16 +212,49 @@ impl World {
                 (Shape::Triangle(tr), Some(b)) => tr.surface_at(b),
                 (shape, _) => shape.surface(ray, h.t),
             };
+            let shading_normal = match self.vertex_normals.get(h.prim as usize) {
+                Some(n) if n[0] != Vec3::ZERO => self.interpolated_normal(p, n, ray, bary, s.n),
+                _ => s.n,
+            };
             Hit {
                 t: h.t,
                 point: s.p,
                 error: s.error,
                 normal: s.n,
+                shading_normal,
                 prim: h.prim,
                 material: p.material,
                 instance: p.instance,
             }
         })
+    }
+
+    /// The vertex normals `n` of primitive `p` (a triangle) interpolated at
+    /// the hit's barycentrics (`bary`, or the watertight test run again
+    /// when the aggregate did not keep them), on the side of the geometric
+    /// normal `ng`.
+    #[cold]
+    fn interpolated_normal(
+        &self,
+        p: &Primitive,
+        n: &[Vec3; 3],
+        ray: &Ray,
+        bary: Option<[f32; 3]>,
+        ng: Vec3,
+    ) -> Vec3 {
+        let Shape::Triangle(tr) = &p.shape else {
+            return ng;
+        };
+        let Some(b) = bary.or_else(|| tr.hit(ray, f32::NEG_INFINITY, f32::INFINITY).map(|h| h.b))
+        else {
+            return ng;
+        };
+        let ns = (b[0] * n[0] + b[1] * n[1] + b[2] * n[2]).normalize_or(ng);
+        if ns.dot(ng) < 0.0 {
+            -ns
+        } else {
+            ns
+        }
     }
 
     /// What the world's light number `index` sends to point `p`:

@@ -174,6 +174,9 @@ struct RenderArgs {
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
     no_flatten: bool,
+    /// Smooth shading for every mesh: vertex normals interpolated across triangles, computed (angle-weighted) for meshes whose file has none. Meshes whose file gives normals (PLY, glTF) are smooth without it.
+    #[arg(long)]
+    smooth: bool,
     /// Write statistics as JSON to this file.
     #[arg(long, value_name = "FILE")]
     stats_json: Option<PathBuf>,
@@ -391,6 +394,7 @@ fn render(a: RenderArgs) -> ExitCode {
         Space::Object => TextureSpace::Object,
     };
     job.build.flatten = !a.no_flatten;
+    job.smooth = a.smooth;
     job.stats_json = a.stats_json;
     job.progress = !a.quiet && std::io::stdout().is_terminal();
     job.cancel = Some(glint::job::interrupt_flag());
