@@ -725,6 +725,8 @@ fn phong_of(m: &gltf::Material) -> Phong {
         transparent: Vec3::splat(1.0 - alpha),
         ior: 1.0,
         glossiness: rough,
+        // glTF's `emissiveFactor` is the emitted radiance (without a texture).
+        emission: Vec3::from(m.emissive_factor()),
     }
 }
 

@@ -300,6 +300,7 @@ impl PathTracer {
                 point: y.p,
                 error: y.error,
                 normal: y.n,
+                shading_normal: y.n,
                 prim,
                 material: p.material,
                 instance: p.instance,
