@@ -37,8 +37,9 @@
 //!   GGX lobe of roughness `α = r²`), clamped to `[1, 10⁴]`,
 //!   `reflective = c·m·(1 − r)²` and `glossiness = r` (blurred mirrors);
 //!   `alphaMode: BLEND` makes the surface `1 − alpha` transparent (no
-//!   refraction). No material: glTF's default (white, `m = 1`, `r = 1`),
-//!   a white diffuse surface by the rule above.
+//!   refraction). `emissiveFactor` becomes the emitted radiance
+//!   (`emittedColor`, seen by the path tracer). No material: glTF's default
+//!   (white, `m = 1`, `r = 1`), a white diffuse surface by the rule above.
 //! - `KHR_lights_punctual`: directional lights along the node's −z,
 //!   point and spot lights (spots without their cone) at the node's origin
 //!   with inverse-square fall-off; a glTF intensity `I` of colour `k`
