@@ -168,6 +168,11 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "FILE",
         "heat maps of intersection tests and nodes visited per pixel",
     ),
+    (
+        "-integrator",
+        "whitted|path",
+        "whitted (the course's ray tree, default) or path (path tracing with light sampling and MIS; -bounces then limits the scattering events per path, default 64)",
+    ),
     ("-help", "", "print this help (also -h, --help)"),
 ];
 
@@ -276,6 +281,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
     let mut sampling: Option<(SamplerKind, u32)> = None;
     let mut seed = 0u64;
     let mut max_depth = Adaptive::DEFAULT_MAX_DEPTH;
+    let mut path = false;
+    let mut bounces_given = false;
     while let Some(flag) = it.next() {
         let mut value = |what: &str| -> Result<&String, String> {
             it.next().ok_or_else(|| format!("{flag} expects {what}"))
@@ -299,6 +306,19 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             "-bounces" => {
                 let n = number(flag, value("a count")?)?;
                 job.integrator.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
+                bounces_given = true;
+            }
+            "-integrator" => {
+                path = match value("whitted or path")?.as_str() {
+                    "whitted" => false,
+                    "path" => true,
+                    other => {
+                        return Err(format!(
+                            "-integrator: expected whitted or path, found {}",
+                            limits::shorten(other)
+                        ))
+                    }
+                };
             }
             "-weight" => {
                 job.integrator.weight_cutoff =
@@ -448,6 +468,17 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
         a.max_depth = max_depth;
     }
     job.sampler = sampling.map(|(kind, n)| Sampler::new(kind, n, seed));
+    if path {
+        let defaults = glint::integrator::PathSettings::default();
+        job.path = Some(glint::integrator::PathSettings {
+            max_bounces: if bounces_given {
+                job.integrator.bounces
+            } else {
+                defaults.max_bounces
+            },
+            ..defaults
+        });
+    }
     job.input = input.ok_or("missing -input SCENE")?;
     job.progress = !quiet && std::io::stdout().is_terminal();
     Ok((job, stats))

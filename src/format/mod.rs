@@ -9,12 +9,14 @@ mod diagnostic;
 mod input;
 mod mit6837;
 
+pub mod gltf;
 pub mod obj;
 mod obj_lean;
+pub mod ply;
 
 pub use diagnostic::ParseError;
 
-use crate::scene::Scene;
+use crate::scene::{self, Scene};
 use std::path::{Path, PathBuf};
 
 /// Reads a scene file; meshes are resolved relative to the scene file's folder.
@@ -30,11 +32,15 @@ pub fn load_scene(path: &Path) -> Result<Scene, ParseError> {
 /// [`load_scene`], and every file it read: the scene file first, then the
 /// meshes it names (so a render can refuse to overwrite any of them).
 pub fn load_scene_files(path: &Path) -> Result<(Scene, Vec<PathBuf>), ParseError> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
-    {
-        return Ok((Scene::for_mesh(obj::load_obj(path)?), vec![path.into()]));
+    if MeshKind::of(path) == Some(MeshKind::Gltf) {
+        return gltf::load_gltf_files(path);
+    }
+    if let Some(kind) = MeshKind::of(path) {
+        let mesh = load_mesh_file(path).map_err(|e| match e {
+            obj::LoadError::Io(e) => ParseError::unreadable(path, &e, kind.expected()),
+            obj::LoadError::Parse(e) => e,
+        })?;
+        return Ok((Scene::for_mesh(mesh), vec![path.into()]));
     }
     let bytes = input::read_input(path)
         .map_err(|e| ParseError::unreadable(path, &e, "a readable scene file"))?;
@@ -42,6 +48,54 @@ pub fn load_scene_files(path: &Path) -> Result<(Scene, Vec<PathBuf>), ParseError
     let (scene, mut files) = mit6837::parse_with_meshes(src, path)?;
     files.insert(0, path.into());
     Ok((scene, files))
+}
+
+/// The mesh formats, known by their file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshKind {
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+    /// Stanford PLY (`.ply`).
+    Ply,
+    /// glTF 2.0 (`.gltf`, `.glb`): a whole scene; as a mesh, its triangles
+    /// with every node's transform applied.
+    Gltf,
+}
+
+impl MeshKind {
+    /// The format of `path` by its extension (any case), if it is a mesh.
+    pub fn of(path: &Path) -> Option<MeshKind> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(MeshKind::Obj),
+            "ply" => Some(MeshKind::Ply),
+            "gltf" | "glb" => Some(MeshKind::Gltf),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn expected(self) -> &'static str {
+        match self {
+            MeshKind::Obj => "a readable OBJ file",
+            MeshKind::Ply => "a readable PLY file",
+            MeshKind::Gltf => "a readable glTF file",
+        }
+    }
+}
+
+/// Reads a mesh file: PLY by its extension, OBJ otherwise (the course's
+/// `obj_file` names have always been read as OBJ, whatever they end in).
+pub(crate) fn load_mesh_file(path: &Path) -> Result<scene::Mesh, obj::LoadError> {
+    match MeshKind::of(path) {
+        Some(MeshKind::Ply) => {
+            let bytes = input::read_input(path).map_err(obj::LoadError::Io)?;
+            ply::parse_ply(&bytes, path).map_err(obj::LoadError::Parse)
+        }
+        Some(MeshKind::Gltf) => gltf::load_gltf(path)
+            .map(|s| gltf::flatten_to_mesh(&s))
+            .map_err(obj::LoadError::Parse),
+        _ => obj::load(path),
+    }
 }
 
 /// Decides whether a scene may read a mesh file, before it is opened: given

@@ -50,7 +50,9 @@ pub enum Structure {
 
 impl Structure {
     /// Builds the structure `kind` names over `world`'s bounded primitives;
-    /// `None` for brute force, which walks nothing.
+    /// `None` for brute force, which walks nothing, and for the 8-wide BVH,
+    /// whose loops record no walk (drawing its binary SAH twin under its
+    /// name would show another tree).
     pub fn build(world: &World, kind: AccelKind) -> Option<Structure> {
         let ids: Vec<u32> = (0..world.prims().len() as u32)
             .filter(|i| !world.unbounded().contains(i))
@@ -70,11 +72,7 @@ impl Structure {
                 // Built from the world's recorded scene tree, as the renderer's.
                 Structure::Hierarchy(HierarchyBvh::new(world.prims(), ids, world.scene_tree()))
             }
-            // The fast BVH records no walk (its loops are kept free of
-            // observers); its teaching twin, the binary SAH BVH, is shown.
-            AccelKind::Bvh8 => {
-                Structure::Bvh(Bvh::new(world.prims(), ids, crate::accel::Split::Sah))
-            }
+            AccelKind::Bvh8 => return None,
         })
     }
 
