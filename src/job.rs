@@ -4,7 +4,7 @@
 use crate::accel::AccelKind;
 use crate::animation::FrameTime;
 use crate::format::{load_scene_files, ParseError};
-use crate::integrator::{AmbientOcclusion, AoSettings, Whitted};
+use crate::integrator::{AmbientOcclusion, AoSettings, PathSettings, PathTracer, Whitted};
 use crate::limits;
 use crate::output::{
     check_image, check_not_input, check_path, check_writable, write_file, write_rgb, FileIdentity,
@@ -89,10 +89,15 @@ pub struct Job {
     pub effect_samples: SampleOverrides,
     /// Render the grey ambient-occlusion image instead of the shaded one.
     pub ao_image: bool,
+    /// Render with the path tracer (`integrator::path`) and these settings
+    /// instead of the Whitted tree (its texture space is `integrator`'s).
+    pub path: Option<PathSettings>,
     /// Render the uniform grid's occupied cells instead of the scene
     /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
     /// the one `build.accel` asks for, if it is a grid.
     pub visualize_grid: Option<GridView>,
+    /// Shade every mesh smooth (`--smooth`): see [`Scene::smooth_meshes`].
+    pub smooth: bool,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -291,10 +296,13 @@ impl Job {
     /// The hash of everything that decides the image (not the accelerator,
     /// the thread count or the outputs, which do not).
     fn piece_hash(&self, scene: &Scene, settings: &Settings) -> String {
-        let parts = format!(
+        let mut parts = format!(
             "{settings:?}|{:?}|flatten {}|texture {:?}",
             self.integrator, self.build.flatten, self.integrator.texture_space
         );
+        if let Some(p) = &self.path {
+            parts += &format!("|path {p:?}");
+        }
         crate::piece::settings_hash(scene, &parts)
     }
 
@@ -355,6 +363,11 @@ impl Job {
             )));
         }
         check_frame_memory(self.width, self.height, available_memory())?;
+        if self.ao_image && self.path.is_some() {
+            return Err(JobError::Usage(
+                "choose one integrator: the AO image or the path tracer".into(),
+            ));
+        }
         self.check_settings()?;
         for path in self.image_paths() {
             check_path(path)?;
@@ -492,7 +505,9 @@ impl Job {
             stats_json: None,
             effect_samples: SampleOverrides::default(),
             ao_image: false,
+            path: None,
             visualize_grid: None,
+            smooth: false,
         }
     }
 
@@ -528,7 +543,13 @@ impl Job {
         }
         let kind = match self.sampler {
             Some(sm) => sm.kind,
-            None if camera_rays > 1 || self.ao_image || uses_sampling(scene) => SamplerKind::Sobol,
+            None if camera_rays > 1
+                || self.ao_image
+                || self.path.is_some()
+                || uses_sampling(scene) =>
+            {
+                SamplerKind::Sobol
+            }
             None => s.sampler.kind,
         };
         if kind != s.sampler.kind || camera_rays > 1 {
@@ -553,7 +574,10 @@ impl Job {
             ));
         }
         let t_load = Instant::now();
-        let (scene, files) = load_scene_files(&self.input)?;
+        let (mut scene, files) = load_scene_files(&self.input)?;
+        if self.smooth {
+            scene.smooth_meshes();
+        }
         // The meshes are known now; nothing has been written yet.
         self.check_clashes(&files)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
@@ -622,15 +646,28 @@ impl Job {
         };
         let settings = self.effect_settings(&scene, samples);
         let start = Instant::now();
-        let rendered = pool.install(|| match (&self.piece, self.ao_image) {
-            (Some(p), false) => {
+        let path_tracer = self.path.map(|p| {
+            PathTracer::new(
+                &world,
+                PathSettings {
+                    texture_space: integrator.texture_space,
+                    ..p
+                },
+            )
+        });
+        let rendered = pool.install(|| match (&self.piece, self.ao_image, &path_tracer) {
+            (Some(p), _, Some(pt)) => {
+                render_region(&world, &camera, pt, &settings, control, p.rect)
+            }
+            (None, _, Some(pt)) => render_image(&world, &camera, pt, &settings, control),
+            (Some(p), false, None) => {
                 render_region(&world, &camera, &integrator, &settings, control, p.rect)
             }
-            (Some(p), true) => {
+            (Some(p), true, None) => {
                 render_region(&world, &camera, &ao_integrator, &settings, control, p.rect)
             }
-            (None, false) => render_image(&world, &camera, &integrator, &settings, control),
-            (None, true) => render_image(&world, &camera, &ao_integrator, &settings, control),
+            (None, false, None) => render_image(&world, &camera, &integrator, &settings, control),
+            (None, true, None) => render_image(&world, &camera, &ao_integrator, &settings, control),
         });
         let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();

@@ -118,6 +118,7 @@ fn random_mesh(r: &mut Rng, at: Vec3, size: f32, k: usize, n: usize) -> Arc<Mesh
     Arc::new(Mesh {
         positions,
         triangles,
+        ..Mesh::default()
     })
 }
 
@@ -237,6 +238,7 @@ fn flat(r: &mut Rng) -> Node {
         triangles: (0..n as u32)
             .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
             .collect(),
+        ..Mesh::default()
     };
     Node::Group(vec![shape(ShapeDesc::Mesh(Arc::new(mesh)))])
 }

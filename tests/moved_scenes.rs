@@ -252,6 +252,7 @@ fn own_whitted() -> Scene {
                 transparent: Vec3::splat(0.9),
                 ior: 1.5,
                 glossiness: 0.0,
+                emission: Vec3::ZERO,
             }),
         ],
         root: Node::Group(vec![
@@ -338,6 +339,7 @@ fn own_mesh_room() -> Scene {
             [1, 3, 7],
             [1, 7, 5],
         ],
+        ..Mesh::default()
     };
     let floor = [
         Vec3::new(-6.0, 0.0, -6.0),

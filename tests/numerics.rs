@@ -98,6 +98,7 @@ fn materials() -> Vec<Material> {
         transparent: Vec3::splat(0.9),
         ior: 1.5,
         glossiness: 0.0,
+        emission: Vec3::ZERO,
     };
     let both = Phong {
         diffuse: Vec3::splat(0.3),
@@ -107,6 +108,7 @@ fn materials() -> Vec<Material> {
         transparent: Vec3::splat(0.5),
         ior: 2.4,
         glossiness: 0.0,
+        emission: Vec3::ZERO,
     };
     vec![
         Material::Phong(matte),
@@ -160,6 +162,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
     let degenerate_mesh = Mesh {
         positions: vec![v(0.0, 0.0, 1.0), v(1.0, 1.0, 1.0), v(2.0, 2.0, 1.0)],
         triangles: vec![[0, 1, 2], [0, 0, 0], [1, 2, 1]],
+        ..Mesh::default()
     };
     out.push((
         "zero-area triangles",
@@ -496,6 +499,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
             transparent: Vec3::splat(0.5),
             ior,
             glossiness: 0.0,
+            emission: Vec3::ZERO,
         })
     };
     extreme.materials.push(glassy(3e38, 1.0));

@@ -95,9 +95,23 @@ fn one_four_and_seven_pieces_merge_bit_for_bit() {
         "--shadows",
         "--quiet",
     ];
+    // The path tracer: every bounce's dimensions from the pixel's stream.
+    let path = [
+        "--size",
+        "29",
+        "23",
+        "--spp",
+        "3",
+        "--integrator",
+        "path",
+        "--bounces",
+        "6",
+        "--quiet",
+    ];
     for n in [1, 4, 7] {
         pieces_equal_single(&dir, "whitted.txt", &wide, n);
         pieces_equal_single(&dir, "mesh_knot_1k.txt", &random, n);
+        pieces_equal_single(&dir, "cornell_caustics.txt", &path, n);
     }
     // A crop's pixels equal the whole render's in that rectangle.
     let scene = own_scene("whitted.txt").to_string_lossy().into_owned();

@@ -167,6 +167,7 @@ fn cube_mesh() -> Mesh {
             [1, 3, 7],
             [1, 7, 5],
         ],
+        ..Mesh::default()
     }
 }
 

@@ -12,6 +12,11 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+// The server of `glint serve`, shared: `-gui` starts it.
+#[path = "glint/serve/mod.rs"]
+#[allow(dead_code)]
+mod serve;
+
 fn main() -> ExitCode {
     glint::job::run_guarded("raytracer", real_main)
 }
@@ -83,7 +88,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gui",
         "",
-        "accepted and ignored (the course's OpenGL preview)",
+        "the course's preview, in a browser: starts `glint serve` on the scene and prints its address",
     ),
     (
         "-tessellation",
@@ -163,6 +168,11 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "FILE",
         "heat maps of intersection tests and nodes visited per pixel",
     ),
+    (
+        "-integrator",
+        "whitted|path",
+        "whitted (the course's ray tree, default) or path (path tracing with light sampling and MIS; -bounces then limits the scattering events per path, default 64)",
+    ),
     ("-help", "", "print this help (also -h, --help)"),
 ];
 
@@ -198,6 +208,9 @@ fn real_main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if args.iter().any(|a| a == "-gui") {
+        return gui(&job);
+    }
     job.cancel = Some(glint::job::interrupt_flag());
     match job.run() {
         Ok(report) => {
@@ -209,6 +222,27 @@ fn real_main() -> ExitCode {
         Err(e) => {
             eprintln!("raytracer: {}", limits::bounded_message(&e.to_string()));
             ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+/// `-gui`: the course's OpenGL preview becomes `glint serve`'s page, with
+/// the command line's size, bounces, weight, shadows and accelerator.
+fn gui(job: &Job) -> ExitCode {
+    let defaults = serve::params::Defaults {
+        size: (job.width, job.height),
+        bounces: job.integrator.bounces,
+        weight: job.integrator.weight_cutoff,
+        shadows: job.integrator.shadows,
+        shade_back: job.integrator.shade_back,
+        spp: job.sampler.map_or(64, |s| s.spp()),
+        accel: job.build.accel.to_string(),
+    };
+    match serve::serve(&job.input, None, None, defaults, "raytracer") {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("raytracer: {}", limits::bounded_message(&msg));
+            ExitCode::from(2)
         }
     }
 }
@@ -229,6 +263,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
     let mut sampling: Option<(SamplerKind, u32)> = None;
     let mut seed = 0u64;
     let mut max_depth = Adaptive::DEFAULT_MAX_DEPTH;
+    let mut path = false;
+    let mut bounces_given = false;
     while let Some(flag) = it.next() {
         let mut value = |what: &str| -> Result<&String, String> {
             it.next().ok_or_else(|| format!("{flag} expects {what}"))
@@ -252,6 +288,19 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             "-bounces" => {
                 let n = number(flag, value("a count")?)?;
                 job.integrator.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
+                bounces_given = true;
+            }
+            "-integrator" => {
+                path = match value("whitted or path")?.as_str() {
+                    "whitted" => false,
+                    "path" => true,
+                    other => {
+                        return Err(format!(
+                            "-integrator: expected whitted or path, found {}",
+                            limits::shorten(other)
+                        ))
+                    }
+                };
             }
             "-weight" => {
                 job.integrator.weight_cutoff =
@@ -360,7 +409,9 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                     for _ in 0..*n {
                         value("its arguments")?;
                     }
-                    ignored.push(*f);
+                    if *f != "-gui" {
+                        ignored.push(*f);
+                    }
                 }
                 None => {
                     return Err(format!(
@@ -399,6 +450,17 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
         a.max_depth = max_depth;
     }
     job.sampler = sampling.map(|(kind, n)| Sampler::new(kind, n, seed));
+    if path {
+        let defaults = glint::integrator::PathSettings::default();
+        job.path = Some(glint::integrator::PathSettings {
+            max_bounces: if bounces_given {
+                job.integrator.bounces
+            } else {
+                defaults.max_bounces
+            },
+            ..defaults
+        });
+    }
     job.input = input.ok_or("missing -input SCENE")?;
     job.progress = !quiet && std::io::stdout().is_terminal();
     Ok((job, stats))

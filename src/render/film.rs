@@ -465,6 +465,43 @@ mod tests {
         }
     }
 
+    /// The same closed form on every pixel, borders and corners included: a
+    /// border pixel receives only the samples of pixels inside the image
+    /// (what the filter reaches beyond the edge is dropped, not clamped onto
+    /// the edge pixel), so its colour is the weighted mean over the in-image
+    /// neighbours alone.
+    #[test]
+    fn border_pixels_are_the_closed_form_means_of_in_image_samples() {
+        let (w, h) = (9i32, 8i32);
+        let filter = Filter::Tent(1.5);
+        let o = Vec2::new(0.3, 0.6);
+        let frame = splat_every_pixel((w as u32, h as u32), 4, filter, o, |x, row| {
+            Vec3::new(x as f32, row as f32, 1.0)
+        });
+        for row in 0..h {
+            for x in 0..w {
+                let (mut sum, mut total) = (Vec3::ZERO, 0.0);
+                for a in -2i32..=2 {
+                    for b in -2i32..=2 {
+                        let (sx, srow) = (x - a, row + b);
+                        if !(0..w).contains(&sx) || !(0..h).contains(&srow) {
+                            continue;
+                        }
+                        let wt = filter.weight(o.x - 0.5 - a as f32, o.y - 0.5 - b as f32);
+                        sum += wt * Vec3::new(sx as f32, srow as f32, 1.0);
+                        total += wt;
+                    }
+                }
+                let want = sum / total;
+                let got = frame.color[(row * w + x) as usize];
+                assert!(
+                    (got - want).abs().max_element() < 1e-5,
+                    "({x}, {row}): {got} vs {want}"
+                );
+            }
+        }
+    }
+
     /// A pixel keeps the hit of its sample nearest the reference point, and
     /// counts every camera ray.
     #[test]

@@ -9,6 +9,44 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     /// Triangles as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
+    /// Unit vertex normals for smooth shading, one per position, or empty
+    /// (flat shading). A zero normal marks a vertex without one.
+    pub normals: Vec<Vec3>,
+    /// Vertex colours (linear RGB, 0 to 1), one per position, or empty.
+    /// Read from files that have them; not yet used in shading.
+    pub colors: Vec<Vec3>,
+}
+
+impl Mesh {
+    /// This mesh with angle-weighted vertex normals (each triangle adds its
+    /// unit normal times its angle at the vertex; Thürmer and Wüthrich
+    /// 1998), computed in f64 and normalised; a vertex of degenerate
+    /// triangles only gets a zero normal (flat shading there).
+    pub fn with_computed_normals(&self) -> Mesh {
+        let mut acc = vec![glam::DVec3::ZERO; self.positions.len()];
+        for t in &self.triangles {
+            let p = t.map(|i| self.positions[i as usize].as_dvec3());
+            let n = (p[1] - p[0]).cross(p[2] - p[0]);
+            let Some(n) = n.try_normalize() else {
+                continue;
+            };
+            for k in 0..3 {
+                let e1 = p[(k + 1) % 3] - p[k];
+                let e2 = p[(k + 2) % 3] - p[k];
+                let angle = e1.angle_between(e2);
+                if angle.is_finite() {
+                    acc[t[k] as usize] += n * angle;
+                }
+            }
+        }
+        Mesh {
+            normals: acc
+                .iter()
+                .map(|n| n.try_normalize().map_or(Vec3::ZERO, |n| n.as_vec3()))
+                .collect(),
+            ..self.clone()
+        }
+    }
 }
 
 /// A geometric shape in its own (object) space, as the scene describes it;
@@ -99,6 +137,19 @@ impl Node {
                     Aabb::from_points(mesh.positions.iter().map(|&p| m.transform_point3(p)))
                 }
             },
+        }
+    }
+
+    /// Calls `f` on every mesh of the subtree.
+    pub(super) fn for_each_mesh(&mut self, f: &mut impl FnMut(&mut Arc<Mesh>)) {
+        match self {
+            Node::Group(children) => children.iter_mut().for_each(|c| c.for_each_mesh(f)),
+            Node::Transform { child, .. } | Node::Moving { child, .. } => child.for_each_mesh(f),
+            Node::Shape {
+                shape: ShapeDesc::Mesh(m),
+                ..
+            } => f(m),
+            Node::Shape { .. } => {}
         }
     }
 

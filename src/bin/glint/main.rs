@@ -29,6 +29,7 @@ mod bench_rays;
 mod deep;
 mod merge;
 mod raytree;
+mod serve;
 mod structure;
 mod traverse;
 
@@ -85,6 +86,8 @@ enum Command {
     Structure(structure::StructureArgs),
     /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
     Merge(merge::MergeArgs),
+    /// Serve the scene live in a browser on 127.0.0.1: progressive render, click a pixel for its ray tree.
+    Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
         /// Scene file (MIT 6.837 format) or a bare .obj mesh.
@@ -144,9 +147,9 @@ struct RenderArgs {
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
     size: Vec<u32>,
-    /// Maximum number of reflection/refraction bounces (0 to 64).
-    #[arg(long, default_value_t = 5)]
-    bounces: u32,
+    /// Maximum number of reflection/refraction bounces (0 to 64; default 5). With --integrator path: scattering events per path (default 64; 0 shows emitters only, 1 direct light).
+    #[arg(long)]
+    bounces: Option<u32>,
     /// Prune ray-tree branches contributing less than this (finite, >= 0).
     #[arg(long, default_value_t = 0.01)]
     weight: f32,
@@ -171,6 +174,9 @@ struct RenderArgs {
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
     no_flatten: bool,
+    /// Smooth shading for every mesh: vertex normals interpolated across triangles, computed (angle-weighted) for meshes whose file has none. Meshes whose file gives normals (PLY, glTF) are smooth without it.
+    #[arg(long)]
+    smooth: bool,
     /// Write statistics as JSON to this file.
     #[arg(long, value_name = "FILE")]
     stats_json: Option<PathBuf>,
@@ -249,7 +255,7 @@ struct RenderArgs {
     /// Ambient-occlusion rays per shaded point (overrides the scene's AmbientOcclusion).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
     ao_samples: Option<u32>,
-    /// What to compute: whitted (shaded image) or ao (grey ambient-occlusion image).
+    /// What to compute: whitted (shaded image), ao (grey ambient-occlusion image) or path (path tracing with light sampling and MIS; see docs/path-tracing.md).
     #[arg(long, value_enum, default_value_t = IntegratorName::Whitted)]
     integrator: IntegratorName,
 }
@@ -259,6 +265,7 @@ struct RenderArgs {
 enum IntegratorName {
     Whitted,
     Ao,
+    Path,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -282,6 +289,7 @@ fn real_main() -> ExitCode {
         Command::Info { scene } => info(scene),
         Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
+        Command::Serve(a) => serve::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
                 let shared = std::env::var_os("GLINT_SHARED")
@@ -386,6 +394,7 @@ fn render(a: RenderArgs) -> ExitCode {
         Space::Object => TextureSpace::Object,
     };
     job.build.flatten = !a.no_flatten;
+    job.smooth = a.smooth;
     job.stats_json = a.stats_json;
     job.progress = !a.quiet && std::io::stdout().is_terminal();
     job.cancel = Some(glint::job::interrupt_flag());
@@ -428,6 +437,12 @@ fn render(a: RenderArgs) -> ExitCode {
         ao: a.ao_samples,
     };
     job.ao_image = a.integrator == IntegratorName::Ao;
+    if a.integrator == IntegratorName::Path {
+        job.path = Some(glint::integrator::PathSettings {
+            max_bounces: job.integrator.bounces,
+            ..Default::default()
+        });
+    }
     job.cost_image = a.cost_image;
     let size = (job.width, job.height);
     let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
@@ -556,7 +571,12 @@ fn check_bench(size: u32, runs: usize, none_limit: f64) -> Result<(), String> {
 /// The numeric render flags, in their documented ranges ([`limits`]):
 /// `--weight nan` rendered before issue 15, `--threads 100000` hung.
 fn check_numbers(a: &RenderArgs, job: &mut Job) -> Result<(), String> {
-    job.integrator.bounces = limits::int_in("--bounces", a.bounces, 0, limits::MAX_BOUNCES)?;
+    let default_bounces = match a.integrator {
+        IntegratorName::Path => glint::integrator::PathSettings::default().max_bounces,
+        _ => 5,
+    };
+    let bounces = a.bounces.unwrap_or(default_bounces);
+    job.integrator.bounces = limits::int_in("--bounces", bounces, 0, limits::MAX_BOUNCES)?;
     job.integrator.weight_cutoff = limits::finite_in("--weight", a.weight, 0.0, f32::MAX)?;
     if let Some(n) = a.threads {
         let (n, note) = limits::threads("--threads", n, limits::cores())?;
