@@ -15,8 +15,9 @@ Where commands are found (the convention every document follows):
 - `--help` texts: `glint --help`, every subcommand's `--help` and
   `raytracer -help` must print and exit 0; a help line `  $ COMMAND` is a
   command too.
-A command ending in `# exits N` must exit with status N; every other one
-with 0.
+A command ending in `# exits N` must exit with status N; one ending in
+`# runs until stopped` (a server) must still be running after 15 seconds,
+and is then stopped; every other one must exit with 0.
 
 How they run: from the repository root with `target/release` first on the
 PATH (built first unless --no-build), in order, one shell each, so a block's
@@ -222,9 +223,21 @@ def main():
             if m:
                 want = int(m.group(1))
             run = reduce(cmd)
+            ran += 1
+            if re.search(r"#\s*runs until stopped\s*$", cmd):
+                p = subprocess.Popen(["bash", "-c", run], cwd=ROOT, env=env,
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                     text=True, start_new_session=True)
+                try:
+                    _, err = p.communicate(timeout=15)
+                    failures.append(f"{where}: exited {p.returncode} instead of running: {run}"
+                                    f"\n    {err.strip()[-300:]}")
+                except subprocess.TimeoutExpired:
+                    os.killpg(p.pid, 15)
+                    p.communicate()
+                continue
             p = subprocess.run(["bash", "-c", run], cwd=ROOT, env=env,
                                capture_output=True, text=True)
-            ran += 1
             if p.returncode != want:
                 err = (p.stderr.strip() or p.stdout.strip()).splitlines()[-3:]
                 failures.append(f"{where}: exit {p.returncode} (expected {want}): {run}\n    "
