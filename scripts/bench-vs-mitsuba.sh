@@ -2,6 +2,12 @@
 # Whole render of scene6_07 (40k-triangle bunny on a plane, two directional lights, shadows):
 # glint against Mitsuba 3's scalar_rgb direct integrator, in one run, as ratios.
 # usage: scripts/bench-vs-mitsuba.sh [VENV] [REPS] [SIZE]
+#        scripts/bench-vs-mitsuba.sh path [VENV] [SPP]
+#   path: the path tracers at equal wall time on 2 threads, on the scenes with Mitsuba references
+#         (tests/mitsuba/NAME_ref.exr, 128x128, 1024 spp): glint renders SPP samples per pixel
+#         (default 64), Mitsuba 3's scalar_rgb path tracer (scripts/mitsuba_twin.py) as many as fit
+#         in the same time (calibrated by a 16-sample run); both RMSEs against the reference, glint's
+#         samples/s and rays/s (Mitsuba reports no ray count), and the RMSE ratio.
 #   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
 #         `pip install mitsuba` on first use)
 #   REPS  repetitions (default 3): medians are reported
@@ -10,6 +16,47 @@
 # Mitsuba is timed with its default (all cores) pool, which is what its README figure is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if [ "${1:-}" = path ]; then
+  venv=${2:-target/mitsuba-venv}
+  spp=${3:-64}
+  if ! [ -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install --quiet mitsuba
+  fi
+  cargo build --release --quiet --bin glint
+  tmp=$(mktemp -d)
+  echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+  echo "| scene | glint spp | glint s | glint samples/s | glint rays/s | glint RMSE | Mitsuba spp | Mitsuba s | Mitsuba samples/s | Mitsuba RMSE | RMSE glint/Mitsuba |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|"
+  for name in cornell_box cornell_caustics mesh_sphere_light; do
+    ./target/release/glint render "scenes/$name.txt" -o "$tmp/g.exr" --size 128 128 --integrator path \
+      --spp "$spp" --threads 2 --quiet --stats-json "$tmp/g.json" >/dev/null
+    twin() { "$venv/bin/python" scripts/mitsuba_twin.py "scenes/$name.txt" "$tmp/m.exr" --size 128 --threads 2 --seed 7 --spp "$1" | sed -E 's/.*: ([0-9.]+) s/\1/'; }
+    t16=$(twin 16)
+    tg=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['render_ms']/1e3)" "$tmp/g.json")
+    mspp=$(python3 -c "import sys; print(max(1, round(16 * float(sys.argv[1]) / float(sys.argv[2]))))" "$tg" "$t16")
+    tm=$(twin "$mspp")
+    "$venv/bin/python" - "$name" "$tmp" "$spp" "$tg" "$mspp" "$tm" <<'PY'
+import json, sys
+import numpy as np
+import mitsuba as mi
+mi.set_variant("scalar_rgb")
+name, tmp, spp, tg, mspp, tm = sys.argv[1:7]
+read = lambda p: np.array(mi.Bitmap(p)).astype(np.float64)[..., :3]
+ref = read(f"tests/mitsuba/{name}_ref.exr")
+rmse = lambda a: float(np.sqrt(((a - ref) ** 2).mean()))
+g, m = rmse(read(f"{tmp}/g.exr")), rmse(read(f"{tmp}/m.exr"))
+stats = json.load(open(f"{tmp}/g.json"))
+px = 128 * 128
+tg, tm = float(tg), float(tm)
+print(f"| {name} | {spp} | {tg:.2f} | {px * int(spp) / tg:,.0f} | {stats['rays_total'] / tg:,.0f} | {g:.4f} "
+      f"| {mspp} | {tm:.2f} | {px * int(mspp) / tm:,.0f} | {m:.4f} | {g / m:.2f} |")
+PY
+  done
+  echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
+  rm -rf "$tmp"
+  exit 0
+fi
 venv=${1:-target/mitsuba-venv}
 reps=${2:-3}
 size=${3:-800}
