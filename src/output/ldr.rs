@@ -135,7 +135,7 @@ mod tests {
         assert_eq!(to_byte_srgb(0.002), 7);
         // 1.055 · 0.5^(1/2.4) − 0.055 = 0.7354 → 187.5 (188); linear gives 127.
         assert_eq!(to_byte_srgb(0.5), 188);
-        // 0.2140 is the linear value of sRGB 0.5 (127.5): rounds to 128.
-        assert_eq!(to_byte_srgb(0.2140), 128);
+        // 0.2144 encodes to 127.6: rounded to 128 (truncation would give 127).
+        assert_eq!(to_byte_srgb(0.2144), 128);
     }
 }
