@@ -31,6 +31,7 @@ mod sampling;
 mod sampling_reference;
 mod scene_props;
 mod textures;
+mod toy_integrator;
 mod viz_cost;
 mod viz_grid;
 mod viz_traversal;
