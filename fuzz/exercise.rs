@@ -8,8 +8,9 @@ use glint::integrator::{AoSettings, NoObserver, RayKind, Whitted};
 use glint::job::Job;
 use glint::limits;
 use glint::math::{Vec2, Vec3};
-use glint::render::{screen_point, CameraModel, Sampler, SamplerKind};
-use glint::scene::{Background, Camera, Node, Scene, Shape};
+use glint::render::{screen_point, CameraModel};
+use glint::sampler::{Sampler, SamplerKind};
+use glint::scene::{Background, Camera, Node, Scene, ShapeDesc};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
@@ -56,7 +57,7 @@ pub fn obj(data: &[u8]) {
         background: Background::default(),
         materials: vec![],
         root: Node::Group(vec![Node::Shape {
-            shape: Shape::Mesh(Arc::new(mesh)),
+            shape: ShapeDesc::Mesh(Arc::new(mesh)),
             material: None,
         }]),
         effects: Default::default(),

@@ -13,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # Unit tests, then these modules of the integration-test binary (tests/main.rs).
-FAST_MODULES=(physics:: accel_edges:: ray_tree:: accel_agree:: watertight::)
+FAST_MODULES=(physics:: accel_edges:: whitted_tree:: accel_agree:: watertight::)
 
 if [ $# -eq 0 ]; then
   set -- $(ls scripts/mutations/*.patch | xargs -n1 basename | sed 's/\.patch$//')

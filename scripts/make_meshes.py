@@ -2,7 +2,9 @@
 """Writes the OBJ meshes of glint's own example scenes (scenes/meshes/).
 
 A (2,3) torus knot tube, at three tessellations, so that one shape gives a
-small, a medium and a large mesh for comparing accelerators. Deterministic:
+small, a medium and a large mesh for comparing accelerators; and a unit cube
+(the Cornell boxes' blocks), its faces counter-clockwise seen from outside.
+Deterministic:
 rerunning it reproduces the committed files byte for byte.
 
     python3 scripts/make_meshes.py
@@ -65,3 +67,22 @@ def write(name, nu, nv):
 
 for name, (nu, nv) in SIZES.items():
     write(name, nu, nv)
+
+
+def write_cube():
+    corners = [(x, y, z) for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)]
+    lines = ["# unit cube centred at the origin, 12 triangles, outward counter-clockwise (scripts/make_meshes.py)"]
+    lines += ["v %g %g %g" % c for c in corners]
+    # corner index = 4*(x>0) + 2*(y>0) + (z>0), 1-based in the file
+    quads = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+    for a, b, c, d in quads:
+        lines.append(f"f {a} {b} {c}")
+        lines.append(f"f {a} {c} {d}")
+    here = os.path.dirname(os.path.abspath(__file__))
+    out = os.path.join(here, "..", "scenes", "meshes", "cube.obj")
+    with open(out, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print(out, 12, "triangles")
+
+
+write_cube()

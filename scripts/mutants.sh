@@ -15,7 +15,7 @@
 # and runs the fast tests below under nextest, which stops at the first
 # failure (`.config/nextest.toml`, profile `mutants`). Results go to
 # `mutants/<name>/mutants.out/` (caught.txt, missed.txt, timeout.txt,
-# unviable.txt); docs/testing.md records the counts and each missed mutant.
+# unviable.txt), which git ignores; docs/testing.md records the counts.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -34,7 +34,7 @@ fi
 # force) and, outside render/, every assignment 7 line (25 s; it checks the
 # samplers, filters and views, all in render/). Accelerators and shapes add
 # the brute-force agreement and watertightness tests.
-common='physics|ray_tree|raytree|reference_images|textures|distribution|sampling|sampling_reference|numerics|reintersect|moved_scenes|viz_cost|viz_grid|viz_traversal|pieces|animation'
+common='physics|whitted_tree|raytree_cli|reference_images|textures|distribution|sampling|sampling_reference|numerics|reintersect|moved_scenes|viz_cost|viz_grid|viz_traversal|pieces|animation'
 # One nextest filterset: the unit tests plus the selected modules of the
 # integration-test binary `suite` (tests/main.rs).
 filter_for() {

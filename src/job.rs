@@ -4,7 +4,7 @@
 use crate::accel::AccelKind;
 use crate::animation::FrameTime;
 use crate::format::{load_scene_files, ParseError};
-use crate::integrator::{AmbientOcclusion, AoSettings, Whitted};
+use crate::integrator::{AmbientOcclusion, AoSettings, PathSettings, PathTracer, Whitted};
 use crate::limits;
 use crate::output::{
     check_image, check_not_input, check_path, check_writable, write_file, write_rgb, FileIdentity,
@@ -14,8 +14,9 @@ use crate::piece::PieceSpec;
 use crate::render::views::{filter_view, heat_map, samples_view, Image};
 use crate::render::{
     render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset,
-    Sampler, SamplerKind, Settings, TILE_SIZE,
+    Settings, TILE_SIZE,
 };
+use crate::sampler::{Sampler, SamplerKind};
 use crate::scene::{EffectSamples, Light, Material, Scene};
 use crate::stats::Counters;
 use crate::viz::draw::Canvas;
@@ -34,6 +35,9 @@ pub struct Job {
     pub input: PathBuf,
     /// Colour image, if wanted.
     pub output: Option<PathBuf>,
+    /// How the colour image's 8-bit formats encode values (the course's
+    /// linear truncation unless `glint render --srgb`).
+    pub encoding: crate::output::Encoding,
     /// Image width.
     pub width: u32,
     /// Image height.
@@ -85,10 +89,15 @@ pub struct Job {
     pub effect_samples: SampleOverrides,
     /// Render the grey ambient-occlusion image instead of the shaded one.
     pub ao_image: bool,
+    /// Render with the path tracer (`integrator::path`) and these settings
+    /// instead of the Whitted tree (its texture space is `integrator`'s).
+    pub path: Option<PathSettings>,
     /// Render the uniform grid's occupied cells instead of the scene
     /// (`-visualize_grid`, `-visualize_grid_count`); the grid's resolution is
     /// the one `build.accel` asks for, if it is a grid.
     pub visualize_grid: Option<GridView>,
+    /// Shade every mesh smooth (`--smooth`): see [`Scene::smooth_meshes`].
+    pub smooth: bool,
 }
 
 /// Why a job failed. Bad input maps to exit status 2, the rest to 1.
@@ -206,7 +215,9 @@ pub struct Report {
     pub render: Duration,
     /// Number of primitives in the world.
     pub primitives: usize,
-    /// Bounds of the world's bounded primitives (planes excluded).
+    /// Bounds of the world's bounded primitives (planes excluded), in world
+    /// space (the scene file's coordinates, not the camera-centred rendering
+    /// space).
     pub bounds: crate::math::Aabb,
     /// The rendered planes.
     pub frame: Frame,
@@ -285,10 +296,13 @@ impl Job {
     /// The hash of everything that decides the image (not the accelerator,
     /// the thread count or the outputs, which do not).
     fn piece_hash(&self, scene: &Scene, settings: &Settings) -> String {
-        let parts = format!(
+        let mut parts = format!(
             "{settings:?}|{:?}|flatten {}|texture {:?}",
             self.integrator, self.build.flatten, self.integrator.texture_space
         );
+        if let Some(p) = &self.path {
+            parts += &format!("|path {p:?}");
+        }
         crate::piece::settings_hash(scene, &parts)
     }
 
@@ -349,6 +363,11 @@ impl Job {
             )));
         }
         check_frame_memory(self.width, self.height, available_memory())?;
+        if self.ao_image && self.path.is_some() {
+            return Err(JobError::Usage(
+                "choose one integrator: the AO image or the path tracer".into(),
+            ));
+        }
         self.check_settings()?;
         for path in self.image_paths() {
             check_path(path)?;
@@ -463,6 +482,7 @@ impl Job {
         Self {
             input,
             output: None,
+            encoding: crate::output::Encoding::Linear,
             width,
             height,
             depth: None,
@@ -485,7 +505,9 @@ impl Job {
             stats_json: None,
             effect_samples: SampleOverrides::default(),
             ao_image: false,
+            path: None,
             visualize_grid: None,
+            smooth: false,
         }
     }
 
@@ -521,7 +543,13 @@ impl Job {
         }
         let kind = match self.sampler {
             Some(sm) => sm.kind,
-            None if camera_rays > 1 || self.ao_image || uses_sampling(scene) => SamplerKind::Sobol,
+            None if camera_rays > 1
+                || self.ao_image
+                || self.path.is_some()
+                || uses_sampling(scene) =>
+            {
+                SamplerKind::Sobol
+            }
             None => s.sampler.kind,
         };
         if kind != s.sampler.kind || camera_rays > 1 {
@@ -541,7 +569,10 @@ impl Job {
             self.check_piece(p)?;
         }
         let t_load = Instant::now();
-        let (scene, files) = load_scene_files(&self.input)?;
+        let (mut scene, files) = load_scene_files(&self.input)?;
+        if self.smooth {
+            scene.smooth_meshes();
+        }
         // The meshes are known now; nothing has been written yet.
         self.check_clashes(&files)?;
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
@@ -610,15 +641,28 @@ impl Job {
         };
         let settings = self.effect_settings(&scene, samples);
         let start = Instant::now();
-        let rendered = pool.install(|| match (&self.piece, self.ao_image) {
-            (Some(p), false) => {
+        let path_tracer = self.path.map(|p| {
+            PathTracer::new(
+                &world,
+                PathSettings {
+                    texture_space: integrator.texture_space,
+                    ..p
+                },
+            )
+        });
+        let rendered = pool.install(|| match (&self.piece, self.ao_image, &path_tracer) {
+            (Some(p), _, Some(pt)) => {
+                render_region(&world, &camera, pt, &settings, control, p.rect)
+            }
+            (None, _, Some(pt)) => render_image(&world, &camera, pt, &settings, control),
+            (Some(p), false, None) => {
                 render_region(&world, &camera, &integrator, &settings, control, p.rect)
             }
-            (Some(p), true) => {
+            (Some(p), true, None) => {
                 render_region(&world, &camera, &ao_integrator, &settings, control, p.rect)
             }
-            (None, false) => render_image(&world, &camera, &integrator, &settings, control),
-            (None, true) => render_image(&world, &camera, &ao_integrator, &settings, control),
+            (None, false, None) => render_image(&world, &camera, &integrator, &settings, control),
+            (None, true, None) => render_image(&world, &camera, &ao_integrator, &settings, control),
         });
         let (frame, counters) = (rendered.frame, rendered.counters);
         let render_time = start.elapsed();
@@ -657,6 +701,15 @@ impl Job {
             crate::piece::write(&out, &frame, p, &hash, &stats)?;
             written.push(out);
         }
+        if let (None, Some(out)) = (&self.piece, &self.output) {
+            let out = if complete {
+                out.clone()
+            } else {
+                partial_path(out)
+            };
+            crate::output::write_rgb_as(&out, w, h, &frame.color, self.encoding)?;
+            written.push(out);
+        }
         let mut write_sized = |out: &PathBuf,
                                (w, h): (u32, u32),
                                pixels: &[crate::math::Vec3]|
@@ -672,11 +725,6 @@ impl Job {
         };
         let mut write =
             |out: &PathBuf, pixels: &[crate::math::Vec3]| write_sized(out, (w, h), pixels);
-        if self.piece.is_none() {
-            if let Some(out) = &self.output {
-                write(out, &frame.color)?;
-            }
-        }
         if let Some((t0, t1, out)) = &self.depth {
             write(out, &frame.depth_image(*t0, *t1))?;
         }
@@ -704,13 +752,13 @@ impl Job {
         let report = Report {
             scene,
             counters,
-            accel: world.accel.describe(),
-            build_ms: world.build_ms,
+            accel: world.accel().describe(),
+            build_ms: world.build_ms(),
             load_ms,
             world_ms,
             render: render_time,
-            primitives: world.prims.len(),
-            bounds: world.bounds(),
+            primitives: world.prims().len(),
+            bounds: world_space(world.bounds(), world.origin()),
             frame,
             settings,
         };
@@ -979,6 +1027,19 @@ pub fn run_guarded(
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(body)) {
         Ok(code) => code,
         Err(_) => std::process::ExitCode::from(1),
+    }
+}
+
+/// `b` (rendering space) moved back to world space by the rendering
+/// origin `o`; an empty box stays empty.
+fn world_space(b: crate::math::Aabb, o: glam::DVec3) -> crate::math::Aabb {
+    if b.is_empty() {
+        return b;
+    }
+    let shift = |v: crate::math::Vec3| (v.as_dvec3() + o).as_vec3();
+    crate::math::Aabb {
+        min: shift(b.min),
+        max: shift(b.max),
     }
 }
 

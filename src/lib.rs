@@ -1,6 +1,7 @@
 //! glint: a teaching-grade, production-fast CPU ray tracer.
 pub mod accel;
 pub mod animation;
+pub mod bsdf;
 pub mod format;
 pub mod integrator;
 pub mod job;

@@ -13,7 +13,7 @@
 //! assert!(scene.occluded(&ray, 0.0, 2.0));
 //! ```
 
-use crate::accel::bvh4::{Bvh4, TrianglesOnly};
+use crate::accel::bvh8::{Bvh8, TrianglesOnly};
 use crate::math::{Ray, Vec3};
 use crate::stats::{NoStats, TraversalStats};
 
@@ -51,7 +51,7 @@ pub enum MeshError {
 /// triangles (in the BVH's leaf blocks), so the caller's buffers may be
 /// dropped after [`MeshScene::new`].
 pub struct MeshScene {
-    bvh: Bvh4,
+    bvh: Bvh8,
     triangles: usize,
 }
 
@@ -78,7 +78,7 @@ impl MeshScene {
             }
         }
         Ok(MeshScene {
-            bvh: Bvh4::from_mesh(vertices, indices),
+            bvh: Bvh8::from_mesh(vertices, indices),
             triangles: indices.len(),
         })
     }

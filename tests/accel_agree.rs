@@ -4,7 +4,7 @@
 //! reproducible from the scene number and ray index it prints) are built as
 //! `glint::scene::Scene` trees: spheres, single triangles, shared meshes,
 //! planes, nested transforms with non-uniform scale and mirroring (so some
-//! primitives stay `Shape::Transformed`), plus the awkward cases: flat
+//! primitives stay `ShapeDesc::Transformed`), plus the awkward cases: flat
 //! scenes, duplicated geometry, a dense cluster beside sparse objects, an
 //! axis-aligned lattice probed by axis-parallel rays along its planes, far
 //! from the origin, empty. Rays start inside and outside the bounds, with
@@ -23,7 +23,7 @@
 
 use glint::accel::{AccelKind, Aggregate, Grid, Split};
 use glint::math::{Keyframe, Mat4, Motion, Quat, Ray, Vec3};
-use glint::scene::{Background, Camera, Mesh, Node, Scene, Shape};
+use glint::scene::{Background, Camera, Mesh, Node, Scene, ShapeDesc};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 use rayon::prelude::*;
@@ -85,7 +85,7 @@ impl Rng {
 // ---------------------------------------------------------------------------
 // Scenes
 
-fn shape(shape: Shape) -> Node {
+fn shape(shape: ShapeDesc) -> Node {
     Node::Shape {
         shape,
         material: None,
@@ -100,14 +100,14 @@ fn xf(matrix: Mat4, child: Node) -> Node {
 }
 
 fn sphere(c: Vec3, r: f32) -> Node {
-    shape(Shape::Sphere {
+    shape(ShapeDesc::Sphere {
         center: c,
         radius: r,
     })
 }
 
 fn triangle(a: Vec3, b: Vec3, c: Vec3) -> Node {
-    shape(Shape::Triangle([a, b, c]))
+    shape(ShapeDesc::Triangle([a, b, c]))
 }
 
 /// A mesh of `n` random triangles over `k` shared vertices in a box of size
@@ -118,6 +118,7 @@ fn random_mesh(r: &mut Rng, at: Vec3, size: f32, k: usize, n: usize) -> Arc<Mesh
     Arc::new(Mesh {
         positions,
         triangles,
+        ..Mesh::default()
     })
 }
 
@@ -153,7 +154,7 @@ fn random_node(r: &mut Rng, depth: u32, budget: &mut usize) -> Node {
             *budget = budget.saturating_sub(n);
             let k = 3 + r.below(30);
             let (at, size) = (r.v(-4.0, 4.0), r.range(0.3, 3.0));
-            shape(Shape::Mesh(random_mesh(r, at, size, k, n)))
+            shape(ShapeDesc::Mesh(random_mesh(r, at, size, k, n)))
         }
         4 | 5 => {
             let child = random_node(r, depth + 1, budget);
@@ -174,7 +175,7 @@ fn mixed(r: &mut Rng) -> Node {
         kids.push(random_node(r, 0, &mut budget));
     }
     if r.chance(0.5) {
-        kids.push(shape(Shape::Plane {
+        kids.push(shape(ShapeDesc::Plane {
             normal: r.unit(),
             offset: r.range(-6.0, 6.0),
         }));
@@ -186,7 +187,7 @@ fn mixed(r: &mut Rng) -> Node {
     if r.chance(0.3) {
         let mut normal = Vec3::ZERO;
         normal[r.below(3)] = if r.chance(0.5) { 1.0 } else { -2.0 };
-        kids.push(shape(Shape::Plane {
+        kids.push(shape(ShapeDesc::Plane {
             normal,
             offset: r.range(-6.0, 6.0),
         }));
@@ -207,7 +208,7 @@ fn deep_tree(r: &mut Rng, depth: u32) -> Node {
             sphere(r.v(-0.5, 0.5), r.range(0.1, 0.6))
         } else {
             let n = 3 + r.below(12);
-            shape(Shape::Mesh(random_mesh(r, Vec3::ZERO, 0.7, 8, n)))
+            shape(ShapeDesc::Mesh(random_mesh(r, Vec3::ZERO, 0.7, 8, n)))
         };
     }
     let scale = match r.below(3) {
@@ -237,8 +238,9 @@ fn flat(r: &mut Rng) -> Node {
         triangles: (0..n as u32)
             .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
             .collect(),
+        ..Mesh::default()
     };
-    Node::Group(vec![shape(Shape::Mesh(Arc::new(mesh)))])
+    Node::Group(vec![shape(ShapeDesc::Mesh(Arc::new(mesh)))])
 }
 
 /// One mesh used three times, twice under the same matrix (exact ties), and
@@ -249,10 +251,10 @@ fn shared(r: &mut Rng) -> Node {
     let mut doubled = (*random_mesh(r, Vec3::ONE, 2.0, 20, 60)).clone();
     doubled.triangles.extend(doubled.triangles.clone());
     Node::Group(vec![
-        xf(m, shape(Shape::Mesh(mesh.clone()))),
-        xf(m, shape(Shape::Mesh(mesh.clone()))),
-        xf(random_matrix(r), shape(Shape::Mesh(mesh))),
-        shape(Shape::Mesh(Arc::new(doubled))),
+        xf(m, shape(ShapeDesc::Mesh(mesh.clone()))),
+        xf(m, shape(ShapeDesc::Mesh(mesh.clone()))),
+        xf(random_matrix(r), shape(ShapeDesc::Mesh(mesh))),
+        shape(ShapeDesc::Mesh(Arc::new(doubled))),
         sphere(Vec3::ZERO, 1.0),
         sphere(Vec3::ZERO, 1.0),
     ])
@@ -262,7 +264,7 @@ fn shared(r: &mut Rng) -> Node {
 /// uniform grid's worst case, the octree's and BVH's home ground.
 fn clustered(r: &mut Rng) -> Node {
     let at = r.v(-1.0, 1.0);
-    let mut kids = vec![shape(Shape::Mesh(random_mesh(r, at, 0.05, 200, 250)))];
+    let mut kids = vec![shape(ShapeDesc::Mesh(random_mesh(r, at, 0.05, 200, 250)))];
     for _ in 0..8 {
         kids.push(sphere(r.v(-20.0, 20.0), r.range(0.5, 3.0)));
     }
@@ -295,7 +297,7 @@ fn scene(seed: u64) -> (Scene, bool) {
     let root = match seed {
         0 => Node::Group(vec![]),
         1 => sphere(Vec3::ZERO, 1.0),
-        2 => shape(Shape::Plane {
+        2 => shape(ShapeDesc::Plane {
             normal: Vec3::Y,
             offset: 0.0,
         }),
@@ -515,7 +517,7 @@ fn check(accel: AccelKind, flatten: bool) -> (Counters, Counters) {
                 q.ray,
                 q.tmin,
                 q.tmax,
-                world.accel.describe(),
+                world.accel().describe(),
             );
             let got = world.occluded(&q.ray, q.tmin, q.tmax, &mut ca);
             assert_eq!(
@@ -588,14 +590,14 @@ fn bvh_sah() {
 }
 
 #[test]
-fn bvh4() {
-    let (a, b) = check(AccelKind::Bvh4, true);
+fn bvh8() {
+    let (a, b) = check(AccelKind::Bvh8, true);
     assert!(a.intersection_tests < b.intersection_tests);
 }
 
 #[test]
-fn bvh4_unflattened() {
-    check(AccelKind::Bvh4, false);
+fn bvh8_unflattened() {
+    check(AccelKind::Bvh8, false);
 }
 
 #[test]
@@ -608,7 +610,7 @@ fn bvh_midpoint() {
     check(AccelKind::Bvh(Split::Midpoint), true);
 }
 
-/// Without flattening, triangles and spheres stay `Shape::Transformed`.
+/// Without flattening, triangles and spheres stay `ShapeDesc::Transformed`.
 #[test]
 fn unflattened_worlds() {
     check(AccelKind::Bvh(Split::Sah), false);
@@ -686,7 +688,7 @@ fn cost_report() {
     for (name, mesh) in [("soup", soup), ("sphere", ball)] {
         let (sc, _) = scene(1);
         let sc = Scene {
-            root: shape(Shape::Mesh(Arc::new(mesh))),
+            root: shape(ShapeDesc::Mesh(Arc::new(mesh))),
             ..sc
         };
         let kinds = [
@@ -699,7 +701,7 @@ fn cost_report() {
             AccelKind::OctreeInner,
             AccelKind::NESTED_GRID,
             AccelKind::BvhHierarchy,
-            AccelKind::Bvh4,
+            AccelKind::Bvh8,
         ];
         let mut rq = Rng::new(5);
         let probe = World::build(&sc, BuildOptions::default());
@@ -724,22 +726,22 @@ fn cost_report() {
             let n = queries.len() as f64;
             println!(
                 "{name:6} {:32} build {:7.1} ms  tests/ray {:8.1}  nodes/ray {:6.1}  {us:6.2} µs/ray  ({hits} hits)",
-                w.accel.describe(),
-                w.build_ms,
+                w.accel().describe(),
+                w.build_ms(),
                 c.intersection_tests as f64 / n,
                 c.nodes_visited as f64 / n,
             );
         }
         // What mailboxing saves: the same grid with and without it.
         let w = World::build(&sc, BuildOptions::default());
-        let ids: Vec<u32> = (0..w.prims.len() as u32).collect();
+        let ids: Vec<u32> = (0..w.prims().len() as u32).collect();
         for res in [None, Some([128, 128, 128])] {
-            let mut grid = Grid::new(&w.prims, ids.clone(), res);
+            let mut grid = Grid::new(w.prims(), ids.clone(), res);
             for on in [true, false] {
                 grid.set_mailbox(on);
                 let mut c = Counters::default();
                 for q in &queries {
-                    grid.intersect(&w.prims, &q.ray, q.tmin, q.tmax, &mut c);
+                    grid.intersect(w.prims(), &q.ray, q.tmin, q.tmax, &mut c);
                 }
                 println!(
                     "{name:6} {:32} mailbox {on:5}  tests/ray {:8.2}",
@@ -838,7 +840,7 @@ fn moving_objects_and_timed_rays() {
         AccelKind::Bvh(Split::Sah),
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
-        AccelKind::Bvh4,
+        AccelKind::Bvh8,
         AccelKind::BvhHierarchy,
         AccelKind::OctreeInner,
         AccelKind::NestedGrid {
@@ -860,8 +862,8 @@ fn moving_objects_and_timed_rays() {
                 let q = random_query(&mut r, &brute, false);
                 let time = r.f();
                 // Half the rays aim at where a random primitive is at their time.
-                let aim = if r.chance(0.5) && !brute.prims.is_empty() {
-                    center_at(&brute.prims[r.below(brute.prims.len())].shape, time)
+                let aim = if r.chance(0.5) && !brute.prims().is_empty() {
+                    center_at(&brute.prims()[r.below(brute.prims().len())].shape, time)
                         .filter(|c| c.is_finite() && (*c - q.ray.origin).length() > 1e-3)
                 } else {
                     None
@@ -884,13 +886,13 @@ fn moving_objects_and_timed_rays() {
                         ),
                         "{} (flatten {flatten}), moving scene {seed}, ray {i}: {ray:?}\n\
                          brute {want:?}\ngot {got:?}",
-                        w.accel.describe()
+                        w.accel().describe()
                     );
                     assert_eq!(
                         want_occ,
                         w.occluded(&ray, q.tmin, q.tmax, &mut c),
                         "{} occlusion, moving scene {seed}, ray {i}",
-                        w.accel.describe()
+                        w.accel().describe()
                     );
                 }
                 rays += 1;

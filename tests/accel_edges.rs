@@ -17,7 +17,7 @@ use glint::accel::{AccelKind, Grid, Split};
 use glint::integrator::Whitted;
 use glint::math::{Ray, Vec3};
 use glint::render::{render, CameraModel, PixelOffset};
-use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape};
+use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 
@@ -46,7 +46,7 @@ fn accelerators() -> Vec<AccelKind> {
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
         AccelKind::BvhHierarchy,
-        AccelKind::Bvh4,
+        AccelKind::Bvh8,
     ]
 }
 
@@ -74,7 +74,7 @@ impl Rng {
     }
 }
 
-fn shape(shape: Shape) -> Node {
+fn shape(shape: ShapeDesc) -> Node {
     Node::Shape {
         shape,
         material: Some(0),
@@ -92,17 +92,17 @@ fn lattice_scene() -> Scene {
         o[axis] = r.below(5) as f32;
         let o = Vec3::from(o);
         let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
-        kids.push(shape(Shape::Triangle([o, o + u, o + u + v])));
-        kids.push(shape(Shape::Triangle([o, o + u + v, o + v])));
+        kids.push(shape(ShapeDesc::Triangle([o, o + u, o + u + v])));
+        kids.push(shape(ShapeDesc::Triangle([o, o + u + v, o + v])));
     }
     for _ in 0..12 {
         let c = Vec3::new(r.below(5) as f32, r.below(5) as f32, r.below(5) as f32);
-        kids.push(shape(Shape::Sphere {
+        kids.push(shape(ShapeDesc::Sphere {
             center: c,
             radius: 0.25,
         }));
     }
-    kids.push(shape(Shape::Triangle([
+    kids.push(shape(ShapeDesc::Triangle([
         Vec3::new(0.0, 0.1, 0.0),
         Vec3::new(4.0, 3.9, 0.3),
         Vec3::new(0.2, 3.5, 4.0),
@@ -247,10 +247,10 @@ fn edge_rays_agree_with_brute_force_for_every_accelerator() {
         flatten: true,
     };
     let brute = World::build_world_space(&scene, opts(AccelKind::None));
-    let ids: Vec<u32> = (0..brute.prims.len() as u32).collect();
+    let ids: Vec<u32> = (0..brute.prims().len() as u32).collect();
     let mut c = Counters::default();
     for res in [[4, 4, 4], [8, 8, 8], [3, 5, 7]] {
-        let lattice = *Grid::new(&brute.prims, ids.clone(), Some(res)).lattice();
+        let lattice = *Grid::new(brute.prims(), ids.clone(), Some(res)).lattice();
         let rays = edge_rays(&lattice);
         let answers: Vec<_> = rays
             .iter()
@@ -298,7 +298,7 @@ fn edge_rays_agree_with_brute_force_for_every_accelerator() {
 /// draws floor where the balls' lower halves are.
 fn balls_on_a_floor() -> Scene {
     let floor = |a: Vec3, b: Vec3, c: Vec3| Node::Shape {
-        shape: Shape::Triangle([a, b, c]),
+        shape: ShapeDesc::Triangle([a, b, c]),
         material: Some(0),
     };
     let (p0, p1, p2, p3) = (
@@ -310,7 +310,7 @@ fn balls_on_a_floor() -> Scene {
     let mut kids = vec![floor(p0, p2, p1), floor(p0, p3, p2)];
     for i in 0..5 {
         kids.push(Node::Shape {
-            shape: Shape::Sphere {
+            shape: ShapeDesc::Sphere {
                 center: Vec3::new(-6.0 + 3.0 * i as f32, 1.0, -2.0 + i as f32),
                 radius: 1.0,
             },
@@ -361,7 +361,7 @@ fn balls_on_a_floor_render_alike_with_every_accelerator() {
                 flatten: true,
             },
         );
-        let cam = CameraModel::new(&world.camera);
+        let cam = CameraModel::new(world.camera());
         let w = Whitted {
             shadows: true,
             ..Whitted::default()

@@ -413,6 +413,12 @@ const CASES: &[Case] = &[
         "expected a glossiness from 0 to 1, found '1.5'",
     ),
     case(
+        "negative_emission.txt",
+        10,
+        55,
+        "expected a colour component from 0 to 10000, found '-4'",
+    ),
+    case(
         "aperture_without_focus.txt",
         7,
         1,
@@ -621,7 +627,7 @@ fn exponent_notation_is_accepted() {
     if let glint::scene::Node::Group(children) = &scene.root {
         for c in children {
             if let glint::scene::Node::Shape {
-                shape: glint::scene::Shape::Sphere { radius, .. },
+                shape: glint::scene::ShapeDesc::Sphere { radius, .. },
                 ..
             } = c
             {

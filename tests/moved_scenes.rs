@@ -22,7 +22,7 @@ use glint::integrator::Whitted;
 use glint::math::{Mat4, Vec3};
 use glint::render::{render, CameraModel, PixelOffset};
 use glint::scene::{
-    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, Shape, TextureKind,
+    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, ShapeDesc, TextureKind,
 };
 use glint::world::{BuildOptions, World};
 use std::fmt::Write as _;
@@ -167,7 +167,7 @@ fn image_in(scene: &Scene, space: Space) -> Vec<[u8; 3]> {
         Space::Camera => World::build(scene, BuildOptions::default()),
         Space::World => World::build_at(scene, BuildOptions::default(), glam::DVec3::ZERO),
     };
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let (frame, _) = render(
         &world,
         &camera,
@@ -189,7 +189,7 @@ fn phong(diffuse: Vec3) -> Phong {
     }
 }
 
-fn shape(shape: Shape, material: usize) -> Node {
+fn shape(shape: ShapeDesc, material: usize) -> Node {
     Node::Shape {
         shape,
         material: Some(material),
@@ -252,25 +252,26 @@ fn own_whitted() -> Scene {
                 transparent: Vec3::splat(0.9),
                 ior: 1.5,
                 glossiness: 0.0,
+                emission: Vec3::ZERO,
             }),
         ],
         root: Node::Group(vec![
             shape(
-                Shape::Plane {
+                ShapeDesc::Plane {
                     normal: Vec3::Y,
                     offset: -1.0,
                 },
                 2,
             ),
             shape(
-                Shape::Sphere {
+                ShapeDesc::Sphere {
                     center: Vec3::new(-0.9, 0.2, -1.6),
                     radius: 1.2,
                 },
                 3,
             ),
             shape(
-                Shape::Sphere {
+                ShapeDesc::Sphere {
                     center: Vec3::new(0.9, -0.1, 0.6),
                     radius: 0.9,
                 },
@@ -338,6 +339,7 @@ fn own_mesh_room() -> Scene {
             [1, 3, 7],
             [1, 7, 5],
         ],
+        ..Mesh::default()
     };
     let floor = [
         Vec3::new(-6.0, 0.0, -6.0),
@@ -390,21 +392,21 @@ fn own_mesh_room() -> Scene {
             }),
         ],
         root: Node::Group(vec![
-            shape(Shape::Triangle([floor[0], floor[1], floor[2]]), 0),
-            shape(Shape::Triangle([floor[0], floor[2], floor[3]]), 0),
+            shape(ShapeDesc::Triangle([floor[0], floor[1], floor[2]]), 0),
+            shape(ShapeDesc::Triangle([floor[0], floor[2], floor[3]]), 0),
             xf(
                 Mat4::from_translation(Vec3::new(-0.5, 1.3, -0.5))
                     * Mat4::from_rotation_y(0.5)
                     * Mat4::from_rotation_x(0.3)
                     * Mat4::from_scale(Vec3::splat(1.3)),
-                shape(Shape::Mesh(Arc::new(ball)), 1),
+                shape(ShapeDesc::Mesh(Arc::new(ball)), 1),
             ),
             xf(
                 Mat4::from_translation(Vec3::new(2.2, 0.6, 0.8))
                     * Mat4::from_rotation_z(0.4)
                     * Mat4::from_scale(Vec3::new(0.4, 0.6, 1.0)),
                 shape(
-                    Shape::Sphere {
+                    ShapeDesc::Sphere {
                         center: Vec3::ZERO,
                         radius: 1.0,
                     },
@@ -415,7 +417,7 @@ fn own_mesh_room() -> Scene {
                 Mat4::from_translation(Vec3::new(1.5, 0.5, -2.0))
                     * Mat4::from_rotation_y(0.7)
                     * Mat4::from_scale(Vec3::splat(0.5)),
-                shape(Shape::Mesh(Arc::new(cube)), 2),
+                shape(ShapeDesc::Mesh(Arc::new(cube)), 2),
             ),
         ]),
         effects: Default::default(),

@@ -12,7 +12,7 @@ use glint::material::TextureSpace;
 use glint::math::{Mat4, Ray, Vec3};
 use glint::render::{render, screen_point, CameraModel, Frame, PixelOffset};
 use glint::scene::{
-    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, Shape, TextureKind,
+    Background, Camera, Light, Material, Mesh, Node, Phong, Scene, ShapeDesc, TextureKind,
 };
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 // ---- scene-building helpers -------------------------------------------------
 
-fn shape(shape: Shape, material: usize) -> Node {
+fn shape(shape: ShapeDesc, material: usize) -> Node {
     Node::Shape {
         shape,
         material: Some(material),
@@ -28,15 +28,15 @@ fn shape(shape: Shape, material: usize) -> Node {
 }
 
 fn sphere(center: Vec3, radius: f32, material: usize) -> Node {
-    shape(Shape::Sphere { center, radius }, material)
+    shape(ShapeDesc::Sphere { center, radius }, material)
 }
 
 fn plane(normal: Vec3, offset: f32, material: usize) -> Node {
-    shape(Shape::Plane { normal, offset }, material)
+    shape(ShapeDesc::Plane { normal, offset }, material)
 }
 
 fn tri(a: Vec3, b: Vec3, c: Vec3, material: usize) -> Node {
-    shape(Shape::Triangle([a, b, c]), material)
+    shape(ShapeDesc::Triangle([a, b, c]), material)
 }
 
 fn xf(matrix: Mat4, child: Node) -> Node {
@@ -98,6 +98,7 @@ fn materials() -> Vec<Material> {
         transparent: Vec3::splat(0.9),
         ior: 1.5,
         glossiness: 0.0,
+        emission: Vec3::ZERO,
     };
     let both = Phong {
         diffuse: Vec3::splat(0.3),
@@ -107,6 +108,7 @@ fn materials() -> Vec<Material> {
         transparent: Vec3::splat(0.5),
         ior: 2.4,
         glossiness: 0.0,
+        emission: Vec3::ZERO,
     };
     vec![
         Material::Phong(matte),
@@ -160,6 +162,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
     let degenerate_mesh = Mesh {
         positions: vec![v(0.0, 0.0, 1.0), v(1.0, 1.0, 1.0), v(2.0, 2.0, 1.0)],
         triangles: vec![[0, 1, 2], [0, 0, 0], [1, 2, 1]],
+        ..Mesh::default()
     };
     out.push((
         "zero-area triangles",
@@ -176,7 +179,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
                     v(0.0, 1e-30, 0.0),
                     4,
                 ),
-                shape(Shape::Mesh(Arc::new(degenerate_mesh)), 1),
+                shape(ShapeDesc::Mesh(Arc::new(degenerate_mesh)), 1),
                 tri(
                     v(-2.0, -2.0, -1.0),
                     v(2.0, -2.0, -1.0),
@@ -496,6 +499,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
             transparent: Vec3::splat(0.5),
             ior,
             glossiness: 0.0,
+            emission: Vec3::ZERO,
         })
     };
     extreme.materials.push(glassy(3e38, 1.0));
@@ -577,7 +581,7 @@ impl RayObserver for FiniteRays {
 /// pixel conventions, and returns what went wrong (empty when all is well).
 pub fn check_scene(name: &str, scene: &Scene, opts: BuildOptions) -> Vec<String> {
     let world = World::build(scene, opts);
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let mut problems = Vec::new();
     // A NaN camera ray hits nothing and would pass for background.
     'sizes: for (w, h) in [(24, 24), (25, 17)] {
@@ -650,7 +654,7 @@ fn extreme_scenes_render_finite_with_transforms_kept() {
 fn extreme_scenes_are_not_empty() {
     for (name, s) in extreme_scenes() {
         let world = World::build(&s, BuildOptions::default());
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         let (frame, _) = render(
             &world,
             &camera,

@@ -10,7 +10,7 @@
 
 use glint::integrator::{RayKind, RayRecorder, RecordedRay, Whitted};
 use glint::math::{Ray, Vec3};
-use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape};
+use glint::scene::{Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 
@@ -34,7 +34,7 @@ fn scene(root: Node, materials: Vec<Phong>, lights: Vec<Light>, bg: Background) 
 
 fn plane(normal: Vec3, offset: f32, material: usize) -> Node {
     Node::Shape {
-        shape: Shape::Plane { normal, offset },
+        shape: ShapeDesc::Plane { normal, offset },
         material: Some(material),
     }
 }
@@ -311,7 +311,7 @@ fn geometry_beyond_a_point_light_casts_no_shadow() {
     }
     // A shelf between floor and light does shadow it.
     let shelf = Node::Shape {
-        shape: Shape::Triangle([
+        shape: ShapeDesc::Triangle([
             Vec3::new(-1.0, 0.5, -1.0),
             Vec3::new(1.0, 0.5, -1.0),
             Vec3::new(0.0, 0.5, 1.0),
@@ -447,7 +447,7 @@ fn phong_highlight_sits_at_the_half_vector() {
         let l = to_light.normalize();
         let s = scene(
             Node::Shape {
-                shape: Shape::Sphere {
+                shape: ShapeDesc::Sphere {
                     center: Vec3::ZERO,
                     radius: 1.0,
                 },

@@ -23,7 +23,7 @@
 
 use glam::{DMat4, DVec3};
 use glint::math::{Keyframe, Motion, Ray, Vec3};
-use glint::scene::{Background, Camera, Mesh, Node, Scene, Shape};
+use glint::scene::{Background, Camera, Mesh, Node, Scene, ShapeDesc};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, Hit, World};
 use std::sync::Arc;
@@ -124,7 +124,7 @@ struct Case {
     time: f32,
 }
 
-fn node(shape: Shape) -> Node {
+fn node(shape: ShapeDesc) -> Node {
     Node::Shape {
         shape,
         material: None,
@@ -167,6 +167,7 @@ fn cube_mesh() -> Mesh {
             [1, 3, 7],
             [1, 7, 5],
         ],
+        ..Mesh::default()
     }
 }
 
@@ -179,7 +180,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             let rad = size as f32;
             Case {
                 kind,
-                node: node(Shape::Sphere {
+                node: node(ShapeDesc::Sphere {
                     center: c,
                     radius: rad,
                 }),
@@ -199,12 +200,12 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             // The scene stores the matrix in f32: use exactly that one.
             let m = m.as_mat4().as_dmat4();
             let shape = if kind == Kind::Ellipsoid {
-                Shape::Sphere {
+                ShapeDesc::Sphere {
                     center: Vec3::ZERO,
                     radius: 1.0,
                 }
             } else {
-                Shape::Mesh(Arc::new(cube_mesh()))
+                ShapeDesc::Mesh(Arc::new(cube_mesh()))
             };
             Case {
                 kind,
@@ -233,7 +234,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             let (t, q, s) = motion.pose(time);
             let m =
                 DMat4::from_scale_rotation_translation(s.as_dvec3(), q.as_dquat(), t.as_dvec3());
-            let sphere = node(Shape::Sphere {
+            let sphere = node(ShapeDesc::Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,
             });
@@ -264,7 +265,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
                 if area > 0.2 * size * size {
                     return Case {
                         kind,
-                        node: node(Shape::Triangle(v)),
+                        node: node(ShapeDesc::Triangle(v)),
                         m: DMat4::IDENTITY,
                         pts: d.to_vec(),
                         time: 0.0,
@@ -280,7 +281,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             let (nd, len) = (n.as_dvec3(), n.as_dvec3().length());
             Case {
                 kind,
-                node: node(Shape::Plane { normal: n, offset }),
+                node: node(ShapeDesc::Plane { normal: n, offset }),
                 m: DMat4::IDENTITY,
                 pts: vec![
                     nd * (offset as f64 / len / len),

@@ -9,9 +9,10 @@ use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::math::Vec3;
 use glint::render::{
-    render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, GridLayout,
-    PixelOffset, Rect, Sampler, SamplerKind, Settings,
+    render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Rect,
+    Settings,
 };
+use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::scene::{Node, Scene};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -19,7 +20,7 @@ use std::path::Path;
 
 fn world_of(scene: &Scene) -> (World, CameraModel) {
     let world = World::build(scene, BuildOptions::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     (world, camera)
 }
 
@@ -263,7 +264,7 @@ fn adaptive_traces_only_the_corners_of_a_flat_image() {
     let (f, c) = render(&world, &cam, &whitted(), &s);
     assert_eq!(c.primary, ((w + 1) * (h + 1)) as u64);
     assert!(f.samples.iter().all(|&n| n == 4));
-    assert!(f.color.iter().all(|&p| p == world.background.color));
+    assert!(f.color.iter().all(|&p| p == world.background().color));
 }
 
 /// On scene7_01's edges adaptive subdivision reaches the RMSE of uniform

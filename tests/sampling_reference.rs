@@ -17,14 +17,13 @@
 //!    (`GridLayout::Inset`), glint's `--sampler uniform` uses cell centres.
 //!    Its sample positions map to screen point `(i + s)/w`, as glint does.
 //! 2. Its gaussian is not cut at 2σ (only by the pixel support
-//!    `⌈2σ − 0.5⌉`), so its kernel is square; glint cuts at 2σ as the course
-//!    notes say (a round kernel). That is the whole difference in filter7_01f,
-//!    filter7_01i and filter7_02c.
-//! 3. Its filter7_01c (`-gaussian_filter 0.5`) and filter7_01c_low_res
-//!    (`-gaussian_filter 1.0`) were drawn with σ = 0.4 and σ = 0.6: fitting
-//!    `−ln(grey)/x²` along the centre row gives 3.15 and 1.40, i.e.
-//!    1/(2σ²) for σ = 0.40 and 0.60 (for filter7_01f it gives 0.1735 =
-//!    1/(2·1.7²), as it should). Suspect references.
+//!    `⌈2σ − 0.5⌉`), so its kernel is square. `raytracer -gaussian_filter`
+//!    uses that kernel (`Filter::GaussianSquare`) and matches filter7_01f,
+//!    filter7_01i, filter7_01c_low_res and filter7_02c exactly; `glint
+//!    render --filter gaussian:σ` keeps the round kernel cut at 2σ.
+//! 3. Its filter7_01c (`-gaussian_filter 0.5`) was drawn with σ = 0.4:
+//!    `raytracer -gaussian_filter 0.4` reproduces it exactly. A suspect
+//!    reference.
 //! 4. scene7_01's hypotenuse lies on `x + y = 0`, through lattice sample
 //!    points, so at 12×12 a few edge pixels flip with rounding (each is 0.7%
 //!    of the image). The watertight triangle test (`docs/numerics.md`)
@@ -42,42 +41,22 @@ const DETERMINISTIC: &[(&str, f64, f64, &str)] = &[
     ("filter7_01b.tga", 0.05, 0.0, "exact (measured 0)"),
     (
         "filter7_01c.tga",
-        1.35,
+        1.7,
         0.032,
-        "reference drawn with sigma 0.4 (measured 1.19, 2.86%)",
+        "reference drawn with sigma 0.4 (measured 1.54, 2.86%; sigma 0.4 matches exactly)",
     ),
     ("filter7_01d.tga", 0.05, 0.0, "exact (measured 0)"),
     ("filter7_01e.tga", 0.05, 0.0, "exact (measured 0.001)"),
-    (
-        "filter7_01f.tga",
-        3.2,
-        0.060,
-        "reference gaussian not cut at 2 sigma (measured 2.89, 5.46%)",
-    ),
+    ("filter7_01f.tga", 0.05, 0.0, "exact (measured 0)"),
     ("filter7_01g.tga", 0.05, 0.0, "exact (measured 0)"),
     ("filter7_01h.tga", 0.05, 0.0, "exact (measured 0)"),
-    (
-        "filter7_01i.tga",
-        3.9,
-        0.074,
-        "reference gaussian not cut at 2 sigma (measured 3.56, 6.72%)",
-    ),
+    ("filter7_01i.tga", 0.05, 0.0, "exact (measured 0)"),
     ("filter7_01a_low_res.tga", 0.05, 0.0, "exact (measured 0)"),
     ("filter7_01b_low_res.tga", 0.05, 0.0, "exact (measured 0)"),
-    (
-        "filter7_01c_low_res.tga",
-        1.2,
-        0.014,
-        "reference drawn with sigma 0.6 (measured 1.05, 1.26%)",
-    ),
+    ("filter7_01c_low_res.tga", 0.05, 0.0, "exact (measured 0)"),
     ("filter7_02a.tga", 0.05, 0.0, "exact (measured 0)"),
     ("filter7_02b.tga", 0.05, 0.0, "exact (measured 0)"),
-    (
-        "filter7_02c.tga",
-        0.8,
-        0.010,
-        "reference gaussian not cut at 2 sigma (measured 0.71, 0.87%)",
-    ),
+    ("filter7_02c.tga", 0.05, 0.0, "exact (measured 0)"),
     (
         "samples7_01b.tga",
         0.2,
@@ -122,9 +101,9 @@ const DETERMINISTIC: &[(&str, f64, f64, &str)] = &[
     ),
     (
         "output7_01f_low_res.tga",
-        5.7,
-        0.023,
-        "gaussian 2-sigma cut, hypotenuse ties; watertight edge ties flip one pixel more than before (measured 5.24, 2.08%)",
+        2.4,
+        0.001,
+        "hypotenuse ties at 12x12, no pixel off by more than 24 (measured 2.16, 0%)",
     ),
     (
         "output7_02d.tga",
@@ -264,6 +243,24 @@ const SHIFT: f64 = 0.4;
 /// also be below 1.15.
 const SHARPNESS: f64 = 0.14;
 
+/// The `-gaussian_filter 0.4` renders whose reference is sharper than the
+/// course's kernel of σ = 0.4 makes them: ours (that kernel, which the
+/// references' filter views match exactly at σ = 0.6, 1.0, 1.7 and 2.3) is
+/// blurrier by this much at most (measured 0.120-0.172, worst output7_03b;
+/// a square kernel of σ = 0.25 measures 0.940 there, the reference 0.943).
+/// The references' smallest σ are suspect (filter7_01c, drawn for 0.5, is
+/// exactly σ = 0.4), so these may only be blurrier than the reference, by at
+/// most [`SMALL_SIGMA_BLUR`], and never sharper by more than [`SHARPNESS`].
+const SMALL_SIGMA: &[&str] = &[
+    "output7_03b.tga",
+    "output7_03c.tga",
+    "output7_03d.tga",
+    "output7_04b.tga",
+    "output7_05b.tga",
+    "output7_05c.tga",
+];
+const SMALL_SIGMA_BLUR: f64 = 0.19;
+
 #[test]
 fn assignment7_every_line_runs_and_matches() {
     let Some(data) = course_data("assignment7_every_line_runs_and_matches") else {
@@ -284,7 +281,16 @@ fn assignment7_every_line_runs_and_matches() {
     }
 
     for &(name, max_mean, max_off, why) in DETERMINISTIC {
-        match diff(&dir.join(name), &reference_for(&data.refs, name)) {
+        let measured = diff(&dir.join(name), &reference_for(&data.refs, name));
+        if let Ok(d) = &measured {
+            // Shown with `--nocapture`: the numbers the bounds come from.
+            eprintln!(
+                "measured {name}: mean abs {:.3}, {:.3}% off",
+                d.mean_abs,
+                100.0 * d.frac_off
+            );
+        }
+        match measured {
             Ok(d) if d.mean_abs <= max_mean && d.frac_off <= max_off => {}
             Ok(d) => failures.push(format!(
                 "{name}: mean abs {:.3} (max {max_mean}), {:.2}% off (max {:.1}%) [{why}]",
@@ -327,7 +333,13 @@ fn assignment7_every_line_runs_and_matches() {
         }
         let ro = sharpness(w, h, &ours) / sharpness(w, h, &ours1);
         let rr = sharpness(w, h, &refs) / sharpness(w, h, &refs1);
-        if (ro - rr).abs() > SHARPNESS || ro > 1.15 {
+        eprintln!("measured {name}: sharpness {ro:.3}, reference {rr:.3}");
+        let blur_allowed = if SMALL_SIGMA.contains(&name) {
+            SMALL_SIGMA_BLUR
+        } else {
+            SHARPNESS
+        };
+        if ro - rr > SHARPNESS || rr - ro > blur_allowed || ro > 1.15 {
             failures.push(format!(
                 "{name}: sharpness {ro:.3} of the one-ray render's, reference {rr:.3}"
             ));
@@ -371,4 +383,65 @@ fn assignment7_every_line_runs_and_matches() {
     }
 
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// `raytracer -gaussian_filter σ` uses the course implementations' square
+/// kernel (limited only by the pixel support `⌈2σ − 0.5⌉`), so its filter
+/// views match the references to the standard image tolerance (mean 1.0,
+/// 0.5% of pixels off by more than 24, as `tests/reference_images.rs`'s
+/// core images); `glint render --filter gaussian:σ` keeps the round kernel
+/// cut at 2σ, and the same view is then visibly off the reference.
+#[test]
+fn raytracer_gaussian_is_the_courses_square_kernel_glint_cuts_at_two_sigma() {
+    let Some(data) = course_data("raytracer_gaussian_square_kernel") else {
+        return;
+    };
+    let dir = scratch("gaussian-kernels");
+    // filter7_01c's reference, drawn for `-gaussian_filter 0.5`, is exactly
+    // the square kernel of σ = 0.4 (the line's own σ is 1.54 off).
+    let c = line_for(&data.scenes, "A7_cmd.txt", "filter7_01c.tga");
+    let mut args = c.args.clone();
+    let i = args.iter().position(|a| a == "-gaussian_filter").unwrap();
+    args[i + 1] = "0.4".into();
+    run_raytracer(&data.scenes, &args, &dir).unwrap();
+    let d = diff(
+        &dir.join("filter7_01c.tga"),
+        &reference_for(&data.refs, "filter7_01c.tga"),
+    );
+    assert_eq!(d.unwrap().mean_abs, 0.0, "filter7_01c at sigma 0.4");
+    let scene = std::fs::canonicalize(data.scenes.join("scene7_01_sphere_triangle.txt")).unwrap();
+    for (name, sigma) in [("filter7_01f.tga", "1.7"), ("filter7_01i.tga", "2.3")] {
+        let line = line_for(&data.scenes, "A7_cmd.txt", name);
+        assert_eq!(flag_value(&line.args, "-gaussian_filter"), Some(sigma));
+        run_raytracer(&data.scenes, &line.args, &dir).unwrap();
+        let reference = reference_for(&data.refs, name);
+        let d = diff(&dir.join(name), &reference).unwrap();
+        assert!(
+            d.mean_abs <= 1.0 && d.frac_off <= 0.005,
+            "raytracer {name}: {d:?}"
+        );
+
+        let glint_out = format!("glint_{name}");
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+            .args(["render", "--quiet"])
+            .arg(&scene)
+            .args(["--size", "9", "9", "--output", "glint_render.tga"])
+            .args(["--render-filter", &glint_out, "20"])
+            .args(["--filter", &format!("gaussian:{sigma}")])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let g = diff(&dir.join(&glint_out), &reference).unwrap();
+        // The round cut zeroes the support square's corners, which the
+        // reference draws grey: measured 2.89 / 5.46% (1.7), 3.56 / 6.72% (2.3).
+        assert!(
+            g.mean_abs > 2.0 && g.frac_off > 0.04,
+            "glint render {name} should keep the 2-sigma cut: {g:?}"
+        );
+    }
 }

@@ -213,7 +213,7 @@ proptest! {
             }
         };
         let world = World::build(&scene, BuildOptions::default());
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         let integrator = Whitted {
             bounces: 3,
             weight_cutoff: 0.0,
@@ -227,7 +227,7 @@ proptest! {
             prop_assert!(c.is_finite(), "colour {c} for\n{text}");
         }
         // Bounded time per primitive: 16 pixels, 3 bounces, a few lights.
-        let budget = Duration::from_millis(500) * (world.prims.len().max(objects) as u32 + 1);
+        let budget = Duration::from_millis(500) * (world.prims().len().max(objects) as u32 + 1);
         prop_assert!(start.elapsed() < budget, "{:?} for\n{text}", start.elapsed());
     }
 }

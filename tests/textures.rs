@@ -147,7 +147,7 @@ fn reference_quirks(scene: &Scene, wood_as_marble: bool) -> (Scene, Scene) {
 /// `step`-th pixel of a `w`×`h` image (rows top first).
 fn trace_points(scene: &Scene, integrator: &Whitted, (w, h): (u32, u32), step: u32) -> Vec<Vec3> {
     let world = World::build(scene, BuildOptions::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     let rows: Vec<u32> = (0..h).step_by(step as usize).collect();
     rows.par_iter()
         .flat_map_iter(|&row| {
@@ -216,7 +216,7 @@ fn fmt3(v: [f64; 3]) -> String {
 
 /// Per-pixel tolerance of the quirk-reproduced renders: (command file,
 /// output, pixel step, largest mean abs difference, largest fraction of
-/// pixels off by more than 24), from the differences measured 2026-11-30
+/// pixels off by more than 24), from the differences measured
 /// plus a margin, the core images' tolerance where that covers them:
 /// - checkerboards: mean 0.10-0.39, 0.06-0.42% off (6_13 the most);
 /// - 6_15, 6_16, 6_17a: identical but for 6_17a's mean of 0.004;
@@ -395,7 +395,7 @@ fn object_space_textures_follow_their_object() {
     use glint::integrator::NoObserver;
     use glint::material::TextureSpace;
     use glint::math::{Mat4, Ray, Vec3};
-    use glint::scene::{Background, Camera, Material, Node, Phong, Scene, Shape, TextureKind};
+    use glint::scene::{Background, Camera, Material, Node, Phong, Scene, ShapeDesc, TextureKind};
     use glint::stats::Counters;
     use glint::world::{BuildOptions, World};
 
@@ -432,7 +432,7 @@ fn object_space_textures_follow_their_object() {
         root: Node::Transform {
             matrix: Mat4::from_translation(Vec3::new(shift, 0.0, 0.0)),
             child: Box::new(Node::Shape {
-                shape: Shape::Plane {
+                shape: ShapeDesc::Plane {
                     normal: Vec3::Z,
                     offset: 0.0,
                 },

@@ -7,11 +7,8 @@
 use crate::common::own_scene;
 use glint::integrator::{Integrator, RayKind, RayObserver};
 use glint::math::{Ray, Vec3};
-use glint::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, PixelOffset, Sampler, SamplerKind,
-    Settings,
-};
-use glint::sampler::SampleStream;
+use glint::render::{render_image, Adaptive, CameraModel, Control, Filter, PixelOffset, Settings};
+use glint::sampler::{SampleStream, Sampler, SamplerKind};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, Hit, World};
 
@@ -59,7 +56,7 @@ fn world(sky: bool) -> (World, CameraModel) {
         glint::format::load_scene(&own_scene("whitted.txt")).unwrap()
     };
     let world = World::build(&scene, BuildOptions::default());
-    let camera = CameraModel::new(&world.camera);
+    let camera = CameraModel::new(world.camera());
     (world, camera)
 }
 

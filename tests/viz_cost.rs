@@ -4,9 +4,8 @@
 use crate::common::*;
 use glint::accel::{AccelKind, Split};
 use glint::integrator::Whitted;
-use glint::render::{
-    render_image, Adaptive, CameraModel, Control, PixelOffset, Sampler, SamplerKind, Settings,
-};
+use glint::render::{render_image, Adaptive, CameraModel, Control, PixelOffset, Settings};
+use glint::sampler::{Sampler, SamplerKind};
 use glint::world::{BuildOptions, World};
 
 #[test]
@@ -32,7 +31,7 @@ fn per_pixel_costs_sum_to_the_totals() {
                 flatten: true,
             },
         );
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         // 0 is adaptive subdivision, whose pixels share their corner rays.
         for spp in [1, 4, 0] {
             let mut settings = Settings::one_ray((37, 23), PixelOffset::CENTER);

@@ -55,7 +55,7 @@ fn brute_occupied(world: &World, l: &Lattice, pad: f32) -> BTreeSet<[u32; 3]> {
         .filter(|&c| {
             let cb = l.cell_bounds(c);
             let b = Aabb::new(cb.min - Vec3::splat(pad), cb.max + Vec3::splat(pad));
-            world.prims.iter().any(|p| match &p.shape {
+            world.prims().iter().any(|p| match &p.shape {
                 Shape::Triangle(t) => triangle_meets_box(t.vertices(), &b),
                 Shape::Sphere(s) => {
                     let d2: f32 = (0..3)

@@ -28,8 +28,8 @@ fn world() -> World {
 }
 
 fn bounded(world: &World) -> Vec<u32> {
-    (0..world.prims.len() as u32)
-        .filter(|i| !world.unbounded.contains(i))
+    (0..world.prims().len() as u32)
+        .filter(|i| !world.unbounded().contains(i))
         .collect()
 }
 
@@ -107,13 +107,13 @@ fn grid_cells_equal_an_independent_parametric_walk() {
     let mut r = Rng(0x2545f4914f6cdd1d);
     let mut compared = 0;
     for res in [[7, 5, 3], [13, 13, 13], [20, 9, 4]] {
-        let grid = Grid::new(&world.prims, bounded(&world), Some(res));
+        let grid = Grid::new(world.prims(), bounded(&world), Some(res));
         let l = *grid.lattice();
         for _ in 0..300 {
             let ray = random_ray(&mut r, centre, size);
             let mut visited = Vec::new();
             let hit = grid.intersect_visiting(
-                &world.prims,
+                world.prims(),
                 &ray,
                 0.0,
                 f32::INFINITY,
@@ -151,13 +151,13 @@ fn bvh_enters_exactly_the_boxes_it_must() {
     let mut r = Rng(0x9e3779b97f4a7c15);
     let mut entered_total = 0;
     for split in [Split::Sah, Split::Median, Split::Midpoint] {
-        let bvh = Bvh::new(&world.prims, bounded(&world), split);
+        let bvh = Bvh::new(world.prims(), bounded(&world), split);
         let nodes = bvh.nodes();
         for _ in 0..300 {
             let ray = random_ray(&mut r, centre, size);
             let mut visits: Vec<NodeVisit> = Vec::new();
             let hit = bvh.intersect_visiting(
-                &world.prims,
+                world.prims(),
                 &ray,
                 0.0,
                 f32::INFINITY,
@@ -290,7 +290,7 @@ fn new_accelerators_are_recorded() {
     let world = world();
     // The oracle: brute force over the same bounded primitives (the view,
     // like the aggregate, leaves the planes to the world).
-    let brute = glint::accel::Brute::new(&world.prims, bounded(&world));
+    let brute = glint::accel::Brute::new(world.prims(), bounded(&world));
     let b = world.bounds();
     let (centre, size) = (b.center(), b.extent().max_element());
     for kind in [
@@ -305,7 +305,7 @@ fn new_accelerators_are_recorded() {
             let ray = random_ray(&mut r, centre, size);
             let (hit, visits) = s.trace(&world, &ray, 0.0);
             let want = brute.intersect(
-                &world.prims,
+                world.prims(),
                 &ray,
                 0.0,
                 f32::INFINITY,

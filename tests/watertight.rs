@@ -14,7 +14,7 @@
 use glam::{DMat4, DVec3};
 use glint::accel::{AccelKind, Split};
 use glint::math::{Ray, Vec3};
-use glint::scene::{Background, Camera, Mesh, Node, Scene, Shape};
+use glint::scene::{Background, Camera, Mesh, Node, Scene, ShapeDesc};
 use glint::shape::Shape as WorldShape;
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -74,7 +74,7 @@ fn scene() -> Scene {
         root: Node::Transform {
             matrix: placement().as_mat4(),
             child: Box::new(Node::Shape {
-                shape: Shape::Mesh(Arc::new(bumpy_sphere())),
+                shape: ShapeDesc::Mesh(Arc::new(bumpy_sphere())),
                 material: None,
             }),
         },
@@ -94,7 +94,7 @@ fn rays(world: &World) -> Vec<Ray> {
     let mut out = Vec::new();
     let mesh = bumpy_sphere();
     let m = placement();
-    let world_vertex = |p: Vec3| (m.transform_point3(p.as_dvec3()) - world.origin).as_vec3();
+    let world_vertex = |p: Vec3| (m.transform_point3(p.as_dvec3()) - world.origin()).as_vec3();
     for t in &mesh.triangles {
         let v = t.map(|i| world_vertex(mesh.positions[i as usize]));
         for k in 0..3 {
@@ -127,7 +127,7 @@ fn rays_through_edges_and_vertices_never_miss() {
         },
         AccelKind::Octree,
         AccelKind::Bvh(Split::Sah),
-        AccelKind::Bvh4,
+        AccelKind::Bvh8,
         AccelKind::Bvh(Split::Median),
         AccelKind::Bvh(Split::Midpoint),
     ];
@@ -177,7 +177,7 @@ fn moller_trumbore(v: [Vec3; 3], r: &Ray) -> Option<f32> {
 fn moller_trumbore_leaks_on_the_same_rays() {
     let world = World::build(&scene(), BuildOptions::default());
     let tris: Vec<[Vec3; 3]> = world
-        .prims
+        .prims()
         .iter()
         .filter_map(|p| match &p.shape {
             WorldShape::Triangle(t) => Some(t.v),

@@ -5,7 +5,7 @@
 //! its tests.
 
 use super::testutil::{ray, soup, Rng};
-use super::{Aggregate, Brute, Bvh, Bvh4, Grid, NestedGrid, Octree, Split, Storage};
+use super::{Aggregate, Brute, Bvh, Bvh8, Grid, NestedGrid, Octree, Split, Storage};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::stats::Counters;
@@ -27,7 +27,7 @@ fn every_aggregate(p: &[Primitive]) -> Vec<(&'static str, Box<dyn Aggregate>)> {
             "nested-grid:16:2",
             Box::new(NestedGrid::new(p, ids(), 16, 2)),
         ),
-        ("bvh4", Box::new(Bvh4::new(p, ids()))),
+        ("bvh8", Box::new(Bvh8::new(p, ids()))),
     ]
 }
 

@@ -18,7 +18,7 @@ pub enum Split {
 
 /// Which aggregate to build.
 ///
-/// The default is `Bvh4`, the fast 8-wide BVH; the others are kept for
+/// The default is `Bvh8`, the fast 8-wide BVH; the others are kept for
 /// teaching and comparison.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum AccelKind {
@@ -51,7 +51,7 @@ pub enum AccelKind {
     BvhHierarchy,
     /// The fast 8-wide BVH (binned SAH, 4-triangle leaf blocks).
     #[default]
-    Bvh4,
+    Bvh8,
 }
 
 impl AccelKind {
@@ -76,22 +76,23 @@ impl AccelKind {
         "octree-inner",
         "nested-grid",
         "bvh-hierarchy",
-        "bvh4",
+        "bvh8",
     ];
 }
 
 /// A name [`AccelKind::from_str`] does not know.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown accelerator `{0}` (expected none, grid, grid:NxNxN, octree, bvh, bvh-sah, bvh-median, bvh-midpoint, bvh4, octree-inner, nested-grid, nested-grid:THRESHOLD[:DEPTH] or bvh-hierarchy)"
+    "unknown accelerator `{0}` (expected none, grid, grid:NxNxN, octree, bvh, bvh-sah, bvh-median, bvh-midpoint, bvh8 (alias bvh4), octree-inner, nested-grid, nested-grid:THRESHOLD[:DEPTH] or bvh-hierarchy)"
 )]
 pub struct ParseAccelError(pub String);
 
 impl FromStr for AccelKind {
     type Err = ParseAccelError;
 
-    /// `none | grid | octree | bvh | bvh-sah | bvh-median | bvh-midpoint | bvh4`
-    /// (case-insensitive; `bvh` is `bvh-sah`), and `grid:NxNxN` or `grid:N`
+    /// `none | grid | octree | bvh | bvh-sah | bvh-median | bvh-midpoint | bvh8`
+    /// (case-insensitive; `bvh` is `bvh-sah`; `bvh4`, the 8-wide BVH's old
+    /// name, is `bvh8`), and `grid:NxNxN` or `grid:N`
     /// for a fixed grid resolution; `octree-inner`, `bvh-hierarchy`, and
     /// `nested-grid[:THRESHOLD[:DEPTH]]` (defaults 16 and 2).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
@@ -108,7 +109,7 @@ impl FromStr for AccelKind {
             "bvh-hierarchy" => AccelKind::BvhHierarchy,
             "nested-grid" => AccelKind::NESTED_GRID,
             other if other.starts_with("nested-grid:") => parse_nested(other).ok_or_else(err)?,
-            "bvh4" => AccelKind::Bvh4,
+            "bvh8" | "bvh4" => AccelKind::Bvh8,
             other => {
                 let res = other.strip_prefix("grid:").ok_or_else(err)?;
                 let n: Vec<u32> = res
@@ -163,7 +164,7 @@ impl fmt::Display for AccelKind {
             AccelKind::NestedGrid { threshold, depth } => {
                 write!(f, "nested-grid:{threshold}:{depth}")
             }
-            AccelKind::Bvh4 => f.write_str("bvh4"),
+            AccelKind::Bvh8 => f.write_str("bvh8"),
         }
     }
 }
@@ -212,7 +213,7 @@ mod tests {
             (AccelKind::OctreeInner, "octree-inner"),
             (AccelKind::BvhHierarchy, "bvh-hierarchy"),
             (AccelKind::Bvh(Split::Midpoint), "bvh-midpoint"),
-            (AccelKind::Bvh4, "bvh4"),
+            (AccelKind::Bvh8, "bvh8"),
             (fixed, "grid:1x2x3"),
         ] {
             assert_eq!(kind.to_string(), name);
@@ -223,6 +224,9 @@ mod tests {
     fn new_names_parse() {
         assert_eq!("octree:inner".parse(), Ok(AccelKind::OctreeInner));
         assert_eq!("nested-grid".parse(), Ok(AccelKind::NESTED_GRID));
+        // The 8-wide BVH's old name stays accepted.
+        assert_eq!("bvh4".parse(), Ok(AccelKind::Bvh8));
+        assert_eq!("BVH4".parse(), Ok(AccelKind::Bvh8));
         assert_eq!(
             "nested-grid:4".parse(),
             Ok(AccelKind::NestedGrid {
@@ -260,6 +264,6 @@ mod tests {
 
     #[test]
     fn default_is_the_fast_bvh() {
-        assert_eq!(AccelKind::default(), AccelKind::Bvh4);
+        assert_eq!(AccelKind::default(), AccelKind::Bvh8);
     }
 }

@@ -10,7 +10,7 @@
 //! | [`bvh`]     | binary BVH (midpoint, median or binned SAH) | stack, nearer child first     |
 //! | [`nested_grid`] | coarse grid, crowded cells hold finer grids | 3DDDA at each level       |
 //! | [`hierarchy`] | BVH of the scene's own groups and transforms | stack, nearest entry first  |
-//! | [`bvh4`]    | 8-wide BVH, 4-triangle leaf blocks (default) | 8 boxes per step, nearest first |
+//! | [`bvh8`]    | 8-wide BVH, 4-triangle leaf blocks (default) | 8 boxes per step, nearest first |
 //!
 //! Three rules every accelerator follows, so that each returns *exactly* the
 //! hit brute force returns:
@@ -32,7 +32,7 @@
 mod aggregate_tests;
 mod brute;
 pub mod bvh;
-pub mod bvh4;
+pub mod bvh8;
 pub mod grid;
 pub mod hierarchy;
 mod kind;
@@ -47,7 +47,7 @@ mod work_tests;
 
 pub use brute::Brute;
 pub use bvh::Bvh;
-pub use bvh4::Bvh4;
+pub use bvh8::Bvh8;
 pub use grid::Grid;
 pub use hierarchy::{HierarchyBvh, SceneTree};
 pub use kind::{AccelKind, ParseAccelError, Split};

@@ -5,11 +5,17 @@ use glint::accel::AccelKind;
 use glint::job::Job;
 use glint::limits;
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, GridLayout, PixelOffset, Sampler, SamplerKind};
+use glint::render::{Adaptive, Filter, PixelOffset};
+use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::viz::grid::GridView;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+
+// The server of `glint serve`, shared: `-gui` starts it.
+#[path = "glint/serve/mod.rs"]
+#[allow(dead_code)]
+mod serve;
 
 fn main() -> ExitCode {
     glint::job::run_guarded("raytracer", real_main)
@@ -55,7 +61,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-accel",
         "NAME",
-        "bvh4 (the fast default), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
+        "bvh8 (the fast default; bvh4 is an alias), none, grid, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy",
     ),
     (
         "-no_flatten",
@@ -82,7 +88,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gui",
         "",
-        "accepted and ignored (the course's OpenGL preview)",
+        "the course's preview, in a browser: starts `glint serve` on the scene and prints its address",
     ),
     (
         "-tessellation",
@@ -134,7 +140,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gaussian_filter",
         "SIGMA",
-        "Gaussian reconstruction filter",
+        "Gaussian reconstruction filter over the whole support square of ceil(2 SIGMA - 0.5) pixels (the course's kernel, not cut at 2 SIGMA)",
     ),
     (
         "-render_samples",
@@ -161,6 +167,11 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "-cost_image",
         "FILE",
         "heat maps of intersection tests and nodes visited per pixel",
+    ),
+    (
+        "-integrator",
+        "whitted|path",
+        "whitted (the course's ray tree, default) or path (path tracing with light sampling and MIS; -bounces then limits the scattering events per path, default 64)",
     ),
     ("-help", "", "print this help (also -h, --help)"),
 ];
@@ -197,6 +208,9 @@ fn real_main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if args.iter().any(|a| a == "-gui") {
+        return gui(&job);
+    }
     job.cancel = Some(glint::job::interrupt_flag());
     match job.run() {
         Ok(report) => {
@@ -208,6 +222,27 @@ fn real_main() -> ExitCode {
         Err(e) => {
             eprintln!("raytracer: {}", limits::bounded_message(&e.to_string()));
             ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+/// `-gui`: the course's OpenGL preview becomes `glint serve`'s page, with
+/// the command line's size, bounces, weight, shadows and accelerator.
+fn gui(job: &Job) -> ExitCode {
+    let defaults = serve::params::Defaults {
+        size: (job.width, job.height),
+        bounces: job.integrator.bounces,
+        weight: job.integrator.weight_cutoff,
+        shadows: job.integrator.shadows,
+        shade_back: job.integrator.shade_back,
+        spp: job.sampler.map_or(64, |s| s.spp()),
+        accel: job.build.accel.to_string(),
+    };
+    match serve::serve(&job.input, None, None, defaults, "raytracer") {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("raytracer: {}", limits::bounded_message(&msg));
+            ExitCode::from(2)
         }
     }
 }
@@ -228,6 +263,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
     let mut sampling: Option<(SamplerKind, u32)> = None;
     let mut seed = 0u64;
     let mut max_depth = Adaptive::DEFAULT_MAX_DEPTH;
+    let mut path = false;
+    let mut bounces_given = false;
     while let Some(flag) = it.next() {
         let mut value = |what: &str| -> Result<&String, String> {
             it.next().ok_or_else(|| format!("{flag} expects {what}"))
@@ -251,6 +288,19 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             "-bounces" => {
                 let n = number(flag, value("a count")?)?;
                 job.integrator.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
+                bounces_given = true;
+            }
+            "-integrator" => {
+                path = match value("whitted or path")?.as_str() {
+                    "whitted" => false,
+                    "path" => true,
+                    other => {
+                        return Err(format!(
+                            "-integrator: expected whitted or path, found {}",
+                            limits::shorten(other)
+                        ))
+                    }
+                };
             }
             "-weight" => {
                 job.integrator.weight_cutoff =
@@ -323,7 +373,8 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                 let f = match flag.as_str() {
                     "-box_filter" => Filter::Box(v),
                     "-tent_filter" => Filter::Tent(v),
-                    _ => Filter::Gaussian(v),
+                    // The course implementations' square kernel (render/filter.rs).
+                    _ => Filter::GaussianSquare(v),
                 };
                 f.validate().map_err(|e| format!("{flag}: {e}"))?;
                 job.filter = f;
@@ -358,7 +409,9 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
                     for _ in 0..*n {
                         value("its arguments")?;
                     }
-                    ignored.push(*f);
+                    if *f != "-gui" {
+                        ignored.push(*f);
+                    }
                 }
                 None => {
                     return Err(format!(
@@ -397,6 +450,17 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
         a.max_depth = max_depth;
     }
     job.sampler = sampling.map(|(kind, n)| Sampler::new(kind, n, seed));
+    if path {
+        let defaults = glint::integrator::PathSettings::default();
+        job.path = Some(glint::integrator::PathSettings {
+            max_bounces: if bounces_given {
+                job.integrator.bounces
+            } else {
+                defaults.max_bounces
+            },
+            ..defaults
+        });
+    }
     job.input = input.ok_or("missing -input SCENE")?;
     job.progress = !quiet && std::io::stdout().is_terminal();
     Ok((job, stats))
@@ -503,7 +567,7 @@ mod tests {
         .unwrap();
         let s = j.sampler.unwrap();
         assert_eq!((s.kind, s.spp()), (SamplerKind::Jittered, 9));
-        assert_eq!(j.filter, Filter::Gaussian(0.4));
+        assert_eq!(j.filter, Filter::GaussianSquare(0.4));
         assert_eq!(j.samples_view, Some((PathBuf::from("s.tga"), 20)));
         let (j, _) = parse(&args("-input a.txt -uniform_samples 4")).unwrap();
         assert_eq!(

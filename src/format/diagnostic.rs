@@ -77,6 +77,13 @@ impl ParseError {
         }
     }
 
+    /// The same error at line `line` (for readers that quote one line of
+    /// a large file without splitting all of it).
+    pub(crate) fn with_line(mut self, line: usize) -> Self {
+        self.line = line;
+        self
+    }
+
     /// An error for a file that could not be read at all (no position).
     pub(crate) fn unreadable(file: &Path, err: &io::Error, expected: &str) -> Self {
         Self {

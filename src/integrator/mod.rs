@@ -6,10 +6,12 @@
 pub mod ao;
 mod observer;
 pub mod optics;
+pub mod path;
 mod whitted;
 
 pub use ao::{AmbientOcclusion, AoSettings};
 pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
+pub use path::{PathSettings, PathTracer, Strategy};
 pub use whitted::Whitted;
 
 use crate::math::{Ray, Vec3};

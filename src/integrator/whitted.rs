@@ -95,7 +95,7 @@ impl Whitted {
             hit.map(|h| h.normal),
         );
         match hit {
-            None => (world.background.color, None),
+            None => (world.background().color, None),
             Some(h) => (
                 self.shade(world, ray, &h, depth, weight, stream, c, obs),
                 Some(h),
@@ -120,27 +120,36 @@ impl Whitted {
         if back && !self.shade_back {
             return Vec3::ZERO;
         }
-        // The shading normal faces the side the ray came from.
-        let n = if back { -hit.normal } else { hit.normal };
+        // The normals face the side the ray came from: `ng` the geometric
+        // one, `n` the shading one (the same vector unless the triangle is
+        // smooth-shaded). Light and mirror directions use `n`; what crosses
+        // the surface is decided by `ng`, so a smooth normal never lets
+        // light through the geometric surface.
+        let (n, ng) = if back {
+            (-hit.shading_normal, -hit.normal)
+        } else {
+            (hit.shading_normal, hit.normal)
+        };
         let p = hit.point;
         let m = self.material_at(world, hit);
 
-        let mut color = world.background.ambient * m.diffuse;
+        let mut color = world.background().ambient * m.diffuse;
         if let Some(ao) = &self.ambient_occlusion {
             if color != Vec3::ZERO {
                 let from = hit.surface_point();
-                color *= unoccluded(world, &from, n, ray.time, ao, depth, stream, c, obs);
+                color *= unoccluded(world, &from, ng, ray.time, ao, depth, stream, c, obs);
             }
         }
         // The lights' shadow rays share their offset origins (`Spawn`).
         let from = &mut Spawn::leaving(hit.surface_point(), hit.prim);
-        for (i, light) in world.lights.iter().enumerate() {
+        for (i, light) in world.lights().iter().enumerate() {
             if !is_delta(light) {
-                color += self.area_light(world, ray, from, light, &m, n, d, depth, stream, c, obs);
+                color +=
+                    self.area_light(world, ray, from, light, &m, n, ng, d, depth, stream, c, obs);
                 continue;
             }
-            let inc = world.incident(i, light, p);
-            color += self.lit(world, ray, from, light, &inc, &m, n, d, depth, c, obs);
+            let inc = world.incident(i, p);
+            color += self.lit(world, ray, from, light, &inc, &m, n, ng, d, depth, c, obs);
         }
 
         if depth >= self.bounces {
@@ -148,13 +157,17 @@ impl Whitted {
         }
         let refl_w = weight * m.reflective.max_element();
         if refl_w > 0.0 && refl_w >= self.weight_cutoff {
-            let r = reflect(d, n);
+            let mut r = reflect(d, n);
+            if n != ng && r.dot(ng) <= 0.0 {
+                // A smooth normal would mirror the ray into the surface.
+                r = reflect(d, ng);
+            }
             let rc = self.spread(
                 world,
                 ray,
                 &hit.surface_point(),
                 r,
-                n,
+                ng,
                 m.glossiness,
                 RayKind::Reflected,
                 depth,
@@ -169,13 +182,22 @@ impl Whitted {
         if trans_w > 0.0 && trans_w >= self.weight_cutoff {
             // Entering or leaving is decided by the side of the geometric normal.
             let (n_i, n_t) = if back { (m.ior, 1.0) } else { (1.0, m.ior) };
-            if let Some(t) = refract(d, n, n_i, n_t) {
+            let through = refract(d, n, n_i, n_t)
+                .filter(|t| n == ng || t.dot(ng) < 0.0)
+                .or_else(|| {
+                    if n == ng {
+                        None
+                    } else {
+                        refract(d, ng, n_i, n_t)
+                    }
+                });
+            if let Some(t) = through {
                 let tc = self.spread(
                     world,
                     ray,
                     &hit.surface_point(),
                     t,
-                    -n,
+                    -ng,
                     m.glossiness,
                     RayKind::Transmitted,
                     depth,
@@ -249,6 +271,7 @@ impl Whitted {
         light: &Light,
         m: &crate::scene::Phong,
         n: Vec3,
+        ng: Vec3,
         d: Vec3,
         depth: u32,
         stream: &mut SampleStream,
@@ -260,7 +283,7 @@ impl Whitted {
         let mut sum = Vec3::ZERO;
         for u in stream.split_2d(k) {
             let inc = sample_light(light, p, u);
-            sum += self.lit(world, ray, from, light, &inc, m, n, d, depth, c, obs);
+            sum += self.lit(world, ray, from, light, &inc, m, n, ng, d, depth, c, obs);
         }
         sum / k as f32
     }
@@ -272,11 +295,11 @@ impl Whitted {
     /// its object's space to the scene's own matrices.
     fn material_at(&self, world: &World, hit: &Hit) -> crate::scene::Phong {
         match self.texture_space {
-            TextureSpace::World => eval(&world.materials, hit.material, hit.point),
+            TextureSpace::World => eval(world.materials(), hit.material, hit.point),
             TextureSpace::Object => eval(
-                &world.object_materials,
+                world.object_materials(),
                 hit.material,
-                world.object_from_world[hit.instance as usize].transform_point3(hit.point),
+                world.object_from_world()[hit.instance as usize].transform_point3(hit.point),
             ),
         }
     }
@@ -294,11 +317,17 @@ impl Whitted {
         inc: &Incident,
         m: &crate::scene::Phong,
         n: Vec3,
+        ng: Vec3,
         d: Vec3,
         depth: u32,
         c: &mut Counters,
         obs: &mut impl RayObserver,
     ) -> Vec3 {
+        if n != ng && inc.to_light.dot(ng) <= 0.0 {
+            // Smooth shading: a light behind the geometric surface does not
+            // shine through it, whatever the interpolated normal says.
+            return Vec3::ZERO;
+        }
         let reflected = phong_light(m, n, inc.to_light, -d, inc.color);
         if reflected == Vec3::ZERO {
             return reflected; // nothing to shadow: no shadow ray needed

@@ -89,6 +89,7 @@ mod tests {
             transparent: Vec3::splat(0.7),
             ior: 2.0,
             glossiness: 0.0,
+            emission: Vec3::ZERO,
         }
     }
 
@@ -101,6 +102,7 @@ mod tests {
             transparent: Vec3::ZERO,
             ior: 1.0,
             glossiness: 0.0,
+            emission: Vec3::ZERO,
         }
     }
 

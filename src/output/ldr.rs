@@ -17,18 +17,44 @@ pub fn to_byte(c: f32) -> u8 {
     (c * 255.0).clamp(0.0, 255.0) as u8
 }
 
-/// Encodes `pixels` (top row first) into `path` as `format`.
+/// How linear values become 8-bit ones.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Encoding {
+    /// [`to_byte`]: the linear value truncated, the course's convention
+    /// (what `raytracer` and its reference images use).
+    #[default]
+    Linear,
+    /// [`to_byte_srgb`]: the sRGB transfer curve, rounded, and for PNG the
+    /// file's `sRGB` chunk, which is what image viewers assume.
+    Srgb,
+}
+
+/// 8-bit sRGB value of a linear channel: clamped to `[0, 1]`, encoded with
+/// the sRGB curve (`12.92·c` up to 0.0031308, else `1.055·c^(1/2.4) − 0.055`)
+/// and rounded; NaN becomes 0.
+pub fn to_byte_srgb(c: f32) -> u8 {
+    let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
+    let v = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (v * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
+/// Encodes `pixels` (top row first) into `path` as `format`, in `encoding`.
 pub(super) fn write(
     path: &Path,
     format: image::ImageFormat,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     pixels: &[Vec3],
+    encoding: Encoding,
 ) -> Result<(), String> {
-    let bytes: Vec<u8> = pixels
-        .iter()
-        .flat_map(|p| p.to_array().map(to_byte))
-        .collect();
+    let byte = match encoding {
+        Encoding::Linear => to_byte,
+        Encoding::Srgb => to_byte_srgb,
+    };
+    let bytes: Vec<u8> = pixels.iter().flat_map(|p| p.to_array().map(byte)).collect();
     if bytes.len() as u64 != 3 * u64::from(width) * u64::from(height) {
         return Err("pixel count does not match the image size".into());
     }
@@ -36,6 +62,15 @@ pub(super) fn write(
     let mut out = BufWriter::new(file);
     match format {
         image::ImageFormat::Tga => write_tga(&mut out, width, height, &bytes),
+        image::ImageFormat::Png if encoding == Encoding::Srgb => {
+            let mut enc = png::Encoder::new(&mut out, width, height);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            let mut w = enc.write_header().map_err(|e| e.to_string())?;
+            w.write_image_data(&bytes).map_err(|e| e.to_string())?;
+            w.finish().map_err(|e| e.to_string())
+        }
         image::ImageFormat::Pnm => PnmEncoder::new(&mut out)
             .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
             .write_image(&bytes, width, height, ExtendedColorType::Rgb8)
@@ -86,5 +121,21 @@ mod tests {
         assert_eq!(to_byte(-1.0), 0);
         assert_eq!(to_byte(7.0), 255);
         assert_eq!(to_byte(f32::NAN), 0);
+    }
+
+    /// The sRGB curve at its ends, its linear toe and mid-grey, rounded.
+    #[test]
+    fn srgb_bytes_follow_the_curve_and_round() {
+        assert_eq!(to_byte_srgb(0.0), 0);
+        assert_eq!(to_byte_srgb(1.0), 255);
+        assert_eq!(to_byte_srgb(7.0), 255);
+        assert_eq!(to_byte_srgb(-1.0), 0);
+        assert_eq!(to_byte_srgb(f32::NAN), 0);
+        // The toe: 12.92 · 0.002 · 255 = 6.59.
+        assert_eq!(to_byte_srgb(0.002), 7);
+        // 1.055 · 0.5^(1/2.4) − 0.055 = 0.7354 → 187.5 (188); linear gives 127.
+        assert_eq!(to_byte_srgb(0.5), 188);
+        // 0.2140 is the linear value of sRGB 0.5 (127.5): rounds to 128.
+        assert_eq!(to_byte_srgb(0.2140), 128);
     }
 }

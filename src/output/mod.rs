@@ -13,7 +13,7 @@ mod ldr;
 
 pub use hdr::ExrWindow;
 pub use identity::{check_not_input, same_file, FileIdentity};
-pub use ldr::to_byte;
+pub use ldr::{to_byte, to_byte_srgb, Encoding};
 
 use crate::math::Vec3;
 use std::path::{Path, PathBuf};
@@ -176,8 +176,21 @@ fn folder_of(path: &Path) -> PathBuf {
 }
 
 /// Writes `pixels` (linear RGB, row-major, top row first) as the image format
-/// `path`'s extension names.
+/// `path`'s extension names; 8-bit formats get the linear values truncated
+/// ([`Encoding::Linear`]).
 pub fn write_rgb(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<(), OutputError> {
+    write_rgb_as(path, width, height, pixels, Encoding::Linear)
+}
+
+/// [`write_rgb`] with the 8-bit formats in `encoding` (the float formats,
+/// `.exr` and `.pfm`, always keep the linear values).
+pub fn write_rgb_as(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Vec3],
+    encoding: Encoding,
+) -> Result<(), OutputError> {
     let format =
         Format::from_path(path).ok_or_else(|| OutputError::Format { path: path.into() })?;
     if pixels.len() as u64 != u64::from(width) * u64::from(height) {
@@ -187,7 +200,7 @@ pub fn write_rgb(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Resul
         });
     }
     write_atomically(path, |tmp| match format {
-        Format::Ldr(f) => ldr::write(tmp, f, width, height, pixels),
+        Format::Ldr(f) => ldr::write(tmp, f, (width, height), pixels, encoding),
         Format::Exr => hdr::write_exr(tmp, width, height, pixels),
         Format::Pfm => hdr::write_pfm(tmp, width, height, pixels),
     })

@@ -347,7 +347,7 @@ mod tests {
         );
         let scene = crate::format::parse_scene(&src, std::path::Path::new("edge.txt")).unwrap();
         let world = World::build(&scene, crate::world::BuildOptions::default());
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         (world, camera)
     }
 

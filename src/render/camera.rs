@@ -116,9 +116,9 @@ impl CameraModel {
     /// The camera a render of `world` uses: the scene's camera in rendering
     /// space with the scene's lens and shutter, on its rig if it moves.
     pub fn of_world(world: &crate::world::World, effects: &crate::scene::Effects) -> Self {
-        let cam = CameraModel::new(&world.camera).with_lens(effects.lens);
+        let cam = CameraModel::new(world.camera()).with_lens(effects.lens);
         match &effects.camera_motion {
-            Some(m) => cam.with_motion(&world.camera, m.clone(), world.origin),
+            Some(m) => cam.with_motion(world.camera(), m.clone(), world.origin()),
             None => cam,
         }
     }

@@ -41,7 +41,8 @@ pub struct Frame {
     /// add up to the render's counters.
     pub cost: Vec<PixelCost>,
     /// Per row (top first): whether it was rendered (a cancelled render
-    /// leaves rows out).
+    /// leaves rows out; a render of a region marks the region's rows when
+    /// the region's pixels in them are).
     pub complete: Vec<bool>,
 }
 

@@ -14,8 +14,7 @@ mod frame;
 mod pixel;
 pub mod views;
 
-pub use crate::sampler;
-pub use crate::sampler::{GridLayout, SampleStream, Sampler, SamplerKind};
+use crate::sampler::{SampleStream, Sampler};
 pub use adaptive::Adaptive;
 pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use filter::Filter;
@@ -255,6 +254,9 @@ fn render_tiles<I: Integrator>(
         settings.filter.support(),
         &mut frame,
     );
+    if let Some(r) = region {
+        film::complete_region(&films, &rects, support, r, &mut frame);
+    }
     Rendered {
         frame,
         counters,
@@ -371,7 +373,7 @@ mod tests {
                Triangle { vertex0 -1 -1 0 vertex1 1 -1 0.5 vertex2 0 1 -0.5 } }";
         let scene = crate::format::parse_scene(src, std::path::Path::new("t.txt")).unwrap();
         let world = World::build(&scene, crate::world::BuildOptions::default());
-        let camera = CameraModel::new(&world.camera);
+        let camera = CameraModel::new(world.camera());
         (world, camera)
     }
 

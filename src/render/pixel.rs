@@ -434,6 +434,7 @@ mod tests {
             point: Vec3::ZERO,
             error: Vec3::ZERO,
             normal,
+            shading_normal: normal,
             prim: 0,
             material: 0,
             instance: 0,

@@ -19,11 +19,19 @@ pub struct Phong {
     /// 0 is a perfect mirror and clear glass, larger values blur them over
     /// a Phong lobe (see `material::glossy`).
     pub glossiness: f32,
+    /// Emitted radiance (W·sr⁻¹·m⁻², per colour channel), leaving the
+    /// surface's front side (both sides of a triangle or plane, the outside
+    /// of a sphere). Seen by the path tracer (directly and by rays that
+    /// bounce onto the surface) and sampled as an area light there; the
+    /// Whitted tree and the AO integrator ignore it. Zero for the course's
+    /// materials.
+    pub emission: Vec3,
 }
 
 impl Default for Phong {
     /// The course's parser defaults: white diffuse, no specular, exponent 1,
-    /// not reflective, opaque, index of refraction 1; and no gloss.
+    /// not reflective, opaque, index of refraction 1; and no gloss, no
+    /// emission.
     fn default() -> Self {
         Self {
             diffuse: Vec3::ONE,
@@ -33,6 +41,7 @@ impl Default for Phong {
             transparent: Vec3::ZERO,
             ior: 1.0,
             glossiness: 0.0,
+            emission: Vec3::ZERO,
         }
     }
 }
@@ -50,6 +59,7 @@ impl Phong {
             transparent: l(self.transparent, b.transparent),
             ior: self.ior + (b.ior - self.ior) * s,
             glossiness: self.glossiness + (b.glossiness - self.glossiness) * s,
+            emission: l(self.emission, b.emission),
         }
     }
 }

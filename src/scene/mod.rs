@@ -12,7 +12,7 @@ pub use camera::Camera;
 pub use effects::{AmbientOcclusion, EffectSamples, Effects, Lens};
 pub use light::{AreaShape, Light};
 pub use material::{Material, Phong, TextureKind};
-pub use node::{Mesh, Node, Shape};
+pub use node::{Mesh, Node, ShapeDesc};
 
 use crate::math::{Aabb, Vec3};
 use std::sync::Arc;
@@ -57,9 +57,19 @@ pub struct Scene {
 impl Scene {
     /// A scene showing `mesh` alone: a perspective camera (45°) looking at
     /// the mesh's bounding sphere from above and to the right, one white
-    /// directional light, a warm grey material. Used for bare OBJ input.
+    /// directional light, a warm grey material. Used for bare mesh input.
     pub fn for_mesh(mesh: Mesh) -> Scene {
-        let b = Aabb::from_points(mesh.positions.iter().copied());
+        let mut s = Scene::for_bounds(Aabb::from_points(mesh.positions.iter().copied()));
+        s.root = Node::Shape {
+            shape: ShapeDesc::Mesh(Arc::new(mesh)),
+            material: Some(0),
+        };
+        s
+    }
+
+    /// [`Scene::for_mesh`]'s camera, light, background and material for
+    /// anything within `b`, with an empty tree.
+    pub fn for_bounds(b: Aabb) -> Scene {
         let (c, r) = if b.is_empty() {
             (Vec3::ZERO, 1.0)
         } else {
@@ -85,12 +95,32 @@ impl Scene {
                 diffuse: Vec3::new(0.8, 0.7, 0.6),
                 ..Phong::default()
             })],
-            root: Node::Shape {
-                shape: Shape::Mesh(Arc::new(mesh)),
-                material: Some(0),
-            },
+            root: Node::Group(Vec::new()),
             effects: Effects::default(),
         }
+    }
+
+    /// Gives every mesh without vertex normals angle-weighted ones
+    /// ([`Mesh::with_computed_normals`]), so all meshes are shaded smooth;
+    /// a mesh shared by several nodes is computed once and stays shared.
+    pub fn smooth_meshes(&mut self) {
+        // (original, smooth) pairs; the originals are kept alive so that
+        // pointer comparison stays meaningful.
+        let mut done: Vec<(Arc<Mesh>, Arc<Mesh>)> = Vec::new();
+        self.root.for_each_mesh(&mut |mesh: &mut Arc<Mesh>| {
+            if !mesh.normals.is_empty() {
+                return;
+            }
+            let smooth = match done.iter().find(|(k, _)| Arc::ptr_eq(k, mesh)) {
+                Some((_, m)) => Arc::clone(m),
+                None => {
+                    let m = Arc::new(mesh.with_computed_normals());
+                    done.push((Arc::clone(mesh), Arc::clone(&m)));
+                    m
+                }
+            };
+            *mesh = smooth;
+        });
     }
 
     /// Counts of what the scene holds, for `glint info` and statistics.

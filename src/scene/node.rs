@@ -9,11 +9,50 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     /// Triangles as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
+    /// Unit vertex normals for smooth shading, one per position, or empty
+    /// (flat shading). A zero normal marks a vertex without one.
+    pub normals: Vec<Vec3>,
+    /// Vertex colours (linear RGB, 0 to 1), one per position, or empty.
+    /// Read from files that have them; not yet used in shading.
+    pub colors: Vec<Vec3>,
 }
 
-/// A geometric shape in its own (object) space.
+impl Mesh {
+    /// This mesh with angle-weighted vertex normals (each triangle adds its
+    /// unit normal times its angle at the vertex; Thürmer and Wüthrich
+    /// 1998), computed in f64 and normalised; a vertex of degenerate
+    /// triangles only gets a zero normal (flat shading there).
+    pub fn with_computed_normals(&self) -> Mesh {
+        let mut acc = vec![glam::DVec3::ZERO; self.positions.len()];
+        for t in &self.triangles {
+            let p = t.map(|i| self.positions[i as usize].as_dvec3());
+            let n = (p[1] - p[0]).cross(p[2] - p[0]);
+            let Some(n) = n.try_normalize() else {
+                continue;
+            };
+            for k in 0..3 {
+                let e1 = p[(k + 1) % 3] - p[k];
+                let e2 = p[(k + 2) % 3] - p[k];
+                let angle = e1.angle_between(e2);
+                if angle.is_finite() {
+                    acc[t[k] as usize] += n * angle;
+                }
+            }
+        }
+        Mesh {
+            normals: acc
+                .iter()
+                .map(|n| n.try_normalize().map_or(Vec3::ZERO, |n| n.as_vec3()))
+                .collect(),
+            ..self.clone()
+        }
+    }
+}
+
+/// A geometric shape in its own (object) space, as the scene describes it;
+/// `world::build` turns it into the renderable [`crate::shape::Shape`].
 #[derive(Clone, Debug, PartialEq)]
-pub enum Shape {
+pub enum ShapeDesc {
     /// Sphere.
     Sphere {
         /// Centre.
@@ -58,7 +97,7 @@ pub enum Node {
     /// file gave no `MaterialIndex` before it.
     Shape {
         /// The geometry.
-        shape: Shape,
+        shape: ShapeDesc,
         /// Index into [`super::Scene::materials`].
         material: Option<usize>,
     },
@@ -83,19 +122,34 @@ impl Node {
                 motion.swept_bounds(&child.bounds(&Mat4::IDENTITY), m)
             }
             Node::Shape { shape, .. } => match shape {
-                Shape::Sphere { center, radius } => Aabb::new(
+                ShapeDesc::Sphere { center, radius } => Aabb::new(
                     *center - Vec3::splat(*radius),
                     *center + Vec3::splat(*radius),
                 )
                 .transformed(m),
-                Shape::Plane { normal, offset } => crate::shape::Plane::new(*normal, *offset)
+                ShapeDesc::Plane { normal, offset } => crate::shape::Plane::new(*normal, *offset)
                     .and_then(|p| p.transformed(&m.as_dmat4()))
                     .map_or(Aabb::EMPTY, |p| p.bounds()),
-                Shape::Triangle(v) => Aabb::from_points(v.iter().map(|&p| m.transform_point3(p))),
-                Shape::Mesh(mesh) => {
+                ShapeDesc::Triangle(v) => {
+                    Aabb::from_points(v.iter().map(|&p| m.transform_point3(p)))
+                }
+                ShapeDesc::Mesh(mesh) => {
                     Aabb::from_points(mesh.positions.iter().map(|&p| m.transform_point3(p)))
                 }
             },
+        }
+    }
+
+    /// Calls `f` on every mesh of the subtree.
+    pub(super) fn for_each_mesh(&mut self, f: &mut impl FnMut(&mut Arc<Mesh>)) {
+        match self {
+            Node::Group(children) => children.iter_mut().for_each(|c| c.for_each_mesh(f)),
+            Node::Transform { child, .. } | Node::Moving { child, .. } => child.for_each_mesh(f),
+            Node::Shape {
+                shape: ShapeDesc::Mesh(m),
+                ..
+            } => f(m),
+            Node::Shape { .. } => {}
         }
     }
 
@@ -110,10 +164,10 @@ impl Node {
                 child.count(s);
             }
             Node::Shape { shape, .. } => match shape {
-                Shape::Sphere { .. } => s.spheres += 1,
-                Shape::Plane { .. } => s.planes += 1,
-                Shape::Triangle(_) => s.triangles += 1,
-                Shape::Mesh(m) => {
+                ShapeDesc::Sphere { .. } => s.spheres += 1,
+                ShapeDesc::Plane { .. } => s.planes += 1,
+                ShapeDesc::Triangle(_) => s.triangles += 1,
+                ShapeDesc::Mesh(m) => {
                     s.meshes += 1;
                     s.triangles += m.triangles.len();
                 }
@@ -135,7 +189,7 @@ mod tests {
 
     fn tri() -> Node {
         Node::Shape {
-            shape: Shape::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
+            shape: ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
             material: None,
         }
     }
@@ -143,7 +197,7 @@ mod tests {
     #[test]
     fn group_is_the_union() {
         let s = Node::Shape {
-            shape: Shape::Sphere {
+            shape: ShapeDesc::Sphere {
                 center: Vec3::new(5.0, 0.0, 0.0),
                 radius: 1.0,
             },
@@ -167,7 +221,7 @@ mod tests {
     #[test]
     fn transformed_sphere_uses_the_8_corners() {
         let s = Node::Shape {
-            shape: Shape::Sphere {
+            shape: ShapeDesc::Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,
             },

@@ -18,7 +18,7 @@ use super::draw::Canvas;
 use crate::accel::grid::Lattice;
 use crate::accel::Grid;
 use crate::math::{Vec2, Vec3};
-use crate::scene::{Material, Node, Phong, Scene, Shape};
+use crate::scene::{Material, Node, Phong, Scene, ShapeDesc};
 use crate::world::World;
 
 /// What the grid view colours its cells by.
@@ -42,10 +42,10 @@ pub struct Voxels {
 /// The grid the renderer would build over `world` (`res` cells per axis, or
 /// the automatic resolution), as counts per cell.
 pub fn voxelize(world: &World, res: Option<[u32; 3]>) -> Voxels {
-    let ids: Vec<u32> = (0..world.prims.len() as u32)
-        .filter(|i| !world.unbounded.contains(i))
+    let ids: Vec<u32> = (0..world.prims().len() as u32)
+        .filter(|i| !world.unbounded().contains(i))
         .collect();
-    let grid = Grid::new(&world.prims, ids, res);
+    let grid = Grid::new(world.prims(), ids, res);
     let lattice = *grid.lattice();
     let mut counts = vec![0; lattice.cells()];
     for c in cells(&lattice) {
@@ -107,7 +107,7 @@ impl Voxels {
                     }
                     for tri in face(b.min, b.max, axis, up) {
                         faces.push(Node::Shape {
-                            shape: Shape::Triangle(tri),
+                            shape: ShapeDesc::Triangle(tri),
                             material: Some(material),
                         });
                     }

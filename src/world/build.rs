@@ -15,11 +15,12 @@
 
 use super::{Primitive, World};
 use crate::accel::{
-    AccelKind, Aggregate, Brute, Bvh, Bvh4, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree,
+    AccelKind, Aggregate, Brute, Bvh, Bvh8, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree,
     Storage,
 };
+use crate::light::LightSource;
 use crate::math::Vec3;
-use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, Shape as Desc};
+use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, ShapeDesc as Desc};
 use crate::shape::{Moving, Plane, Shape, Sphere, Transformed, Triangle};
 use glam::{DMat4, DVec3};
 use std::time::Instant;
@@ -71,11 +72,15 @@ impl World {
         let render_from_world = DMat4::from_translation(-origin);
         let mut f = Flattener {
             prims: Vec::new(),
+            vertex_normals: Vec::new(),
             object_from_world: vec![DMat4::from_translation(origin).as_mat4()],
             default_material,
             flatten: opts.flatten,
         };
         let tree = f.node(&scene.root, render_from_world, 0);
+        if !f.vertex_normals.is_empty() {
+            f.vertex_normals.resize(f.prims.len(), [Vec3::ZERO; 3]);
+        }
         let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
             (0..f.prims.len() as u32).partition(|&i| f.prims[i as usize].bounds().is_finite());
         let start = Instant::now();
@@ -83,9 +88,14 @@ impl World {
         let lights: Vec<Light> = (scene.lights.iter())
             .map(|l| light_to_render_space(l, origin))
             .collect();
+        let sources: Vec<LightSource> = lights.iter().map(LightSource::from_scene).collect();
+        let emitters = (0..sources.len() as u32)
+            .filter(|&i| !sources[i as usize].is_delta())
+            .collect();
         World {
             build_ms: start.elapsed().as_secs_f64() * 1e3,
-            prepared_lights: super::lights::PreparedLights::new(&lights),
+            sources,
+            emitters,
             lights,
             prims: f.prims,
             accel,
@@ -97,6 +107,7 @@ impl World {
             background: scene.background.clone(),
             object_from_world: f.object_from_world,
             scene_tree: tree,
+            vertex_normals: f.vertex_normals,
         }
     }
 }
@@ -175,12 +186,15 @@ fn build_aggregate(
             Box::new(NestedGrid::new(prims, ids, threshold, depth))
         }
         AccelKind::BvhHierarchy => Box::new(HierarchyBvh::new(prims, ids, tree)),
-        AccelKind::Bvh4 => Box::new(Bvh4::new(prims, ids)),
+        AccelKind::Bvh8 => Box::new(Bvh8::new(prims, ids)),
     }
 }
 
 struct Flattener {
     prims: Vec<Primitive>,
+    /// `World::vertex_normals` so far (shorter than `prims` until the end:
+    /// missing entries are flat).
+    vertex_normals: Vec<[Vec3; 3]>,
     object_from_world: Vec<glam::Mat4>,
     default_material: u32,
     flatten: bool,
@@ -218,6 +232,8 @@ impl Flattener {
                 let start = self.prims.len();
                 self.node(child, DMat4::IDENTITY, instance);
                 let inner: Vec<Primitive> = self.prims.drain(start..).collect();
+                // Moving triangles are shaded flat.
+                self.vertex_normals.truncate(start);
                 let parent = m.as_mat4();
                 for p in inner {
                     if let Some(mv) = Moving::new(p.shape, motion.clone(), parent) {
@@ -278,11 +294,51 @@ impl Flattener {
             Desc::Mesh(mesh) => {
                 let pos: Vec<Vec3> = mesh.positions.iter().map(|&p| point(p)).collect();
                 let flip = m.determinant() < 0.0;
+                let first = self.prims.len();
                 for t in &mesh.triangles {
                     let [a, b, c] = t.map(|i| pos[i as usize]);
-                    push(Shape::Triangle(oriented(a, b, c, flip)));
+                    self.prims.push(Primitive {
+                        shape: Shape::Triangle(oriented(a, b, c, flip)),
+                        material,
+                        instance,
+                    });
+                }
+                if mesh.normals.len() == mesh.positions.len() {
+                    self.smooth(mesh, m, flip, first);
                 }
             }
+        }
+    }
+}
+
+impl Flattener {
+    /// Records the vertex normals of `mesh`, whose triangles are the
+    /// primitives from `first` on, carried by the inverse transpose of `m`
+    /// (in f64) and put in the order `oriented` gave the vertices.
+    fn smooth(&mut self, mesh: &crate::scene::Mesh, m: DMat4, flip: bool, first: usize) {
+        let normal_matrix = glam::DMat3::from_mat4(m).inverse().transpose();
+        if !normal_matrix.is_finite() {
+            return;
+        }
+        let normals: Vec<Vec3> = (mesh.normals.iter())
+            .map(|n| {
+                (normal_matrix * n.as_dvec3())
+                    .try_normalize()
+                    .map_or(Vec3::ZERO, |n| n.as_vec3())
+            })
+            .collect();
+        self.vertex_normals.resize(first, [Vec3::ZERO; 3]);
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| normals[i as usize]);
+            // A vertex without a normal makes its triangles flat.
+            let n = if a == Vec3::ZERO || b == Vec3::ZERO || c == Vec3::ZERO {
+                [Vec3::ZERO; 3]
+            } else if flip {
+                [a, c, b]
+            } else {
+                [a, b, c]
+            };
+            self.vertex_normals.push(n);
         }
     }
 }

@@ -13,12 +13,12 @@
 //! world-space point or ray is brought in with [`World::ray_from_world`].
 
 mod build;
-mod lights;
 
 pub use crate::primitive::Primitive;
 pub use build::BuildOptions;
 
 use crate::accel::Aggregate;
+use crate::light::{EmitterHit, Incident, LightSource};
 use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
 use crate::scene::{Background, Camera, Light, Material};
 use crate::shape::Shape;
@@ -38,6 +38,11 @@ pub struct Hit {
     /// Unit geometric normal (the shape's outward/front side, not flipped
     /// towards the ray).
     pub normal: Vec3,
+    /// Unit shading normal: on a smooth-shaded triangle the vertex normals
+    /// interpolated at the hit, turned to `normal`'s side; elsewhere
+    /// exactly `normal`. Light and reflection use it; rays are spawned by
+    /// `normal` (see `integrator::whitted`).
+    pub shading_normal: Vec3,
     /// Primitive index.
     pub prim: u32,
     /// Material index.
@@ -68,41 +73,126 @@ impl Hit {
 /// all in rendering space (see the module documentation).
 pub struct World {
     /// All primitives.
-    pub prims: Vec<Primitive>,
+    prims: Vec<Primitive>,
     /// Aggregate over the bounded primitives.
-    pub accel: Box<dyn Aggregate>,
+    accel: Box<dyn Aggregate>,
     /// Primitives with infinite bounds (planes), tested on every ray.
-    pub unbounded: Vec<u32>,
+    unbounded: Vec<u32>,
     /// Material table (the scene's, plus a default for shapes that had none),
     /// for lookups at rendering-space points: texture matrices have the
     /// translation back to world space folded in (in f64), so a texture
     /// stays exactly where the scene put it.
-    pub materials: Vec<Material>,
+    materials: Vec<Material>,
     /// The same table with the scene's own texture matrices, for lookups at
     /// object-space points (`TextureSpace::Object`).
-    pub object_materials: Vec<Material>,
+    object_materials: Vec<Material>,
     /// Lights (point lights moved into rendering space).
-    pub lights: Vec<Light>,
+    lights: Vec<Light>,
     /// The scene's camera in rendering space (its centre at the origin):
     /// build the [`crate::render::CameraModel`] for this world from it.
-    pub camera: Camera,
+    camera: Camera,
     /// Where the rendering-space origin lies in world space.
-    pub origin: DVec3,
+    origin: DVec3,
     /// Background and ambient light.
-    pub background: Background,
+    background: Background,
     /// Rendering-space-to-object matrices, indexed by [`Primitive::instance`];
     /// entry 0 is the rendering-to-world translation.
-    pub object_from_world: Vec<Mat4>,
+    object_from_world: Vec<Mat4>,
     /// Milliseconds spent building the aggregate.
-    pub build_ms: f64,
+    build_ms: f64,
     /// The scene's object tree over `prims` (groups, transforms, shapes), as
     /// flattening met it: what `bvh-hierarchy` is built from.
-    pub scene_tree: crate::accel::SceneTree,
-    /// What of `lights` is the same at every shading point, prepared once.
-    prepared_lights: lights::PreparedLights,
+    scene_tree: crate::accel::SceneTree,
+    /// The lights as the integrators use them, index for index with
+    /// `lights`: built once (directions normalised, radiances computed).
+    sources: Vec<LightSource>,
+    /// Indices of the area lights in `sources`: surfaces a ray can hit,
+    /// kept out of the aggregate (the Whitted tree never sees them).
+    emitters: Vec<u32>,
+    /// Vertex normals of smooth-shaded triangles by primitive index, each
+    /// matching its triangle's vertex order (zero for a flat primitive);
+    /// empty when every triangle is flat, so flat scenes pay one test of
+    /// an empty vector per closest hit.
+    vertex_normals: Vec<[Vec3; 3]>,
 }
 
 impl World {
+    /// All primitives.
+    #[inline]
+    pub fn prims(&self) -> &[Primitive] {
+        &self.prims
+    }
+
+    /// The aggregate over the bounded primitives.
+    #[inline]
+    pub fn accel(&self) -> &dyn Aggregate {
+        &*self.accel
+    }
+
+    /// Indices of the primitives with infinite bounds (planes), tested on
+    /// every ray.
+    #[inline]
+    pub fn unbounded(&self) -> &[u32] {
+        &self.unbounded
+    }
+
+    /// The material table for lookups at rendering-space points (see the
+    /// field's documentation: texture matrices map rendering space).
+    #[inline]
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// The material table with the scene's own texture matrices, for
+    /// lookups at object-space points.
+    #[inline]
+    pub fn object_materials(&self) -> &[Material] {
+        &self.object_materials
+    }
+
+    /// The scene's lights in rendering space.
+    #[inline]
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// The scene's camera in rendering space (its centre at the origin):
+    /// build the [`crate::render::CameraModel`] for this world from it.
+    #[inline]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Where the rendering-space origin lies in world space.
+    #[inline]
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+
+    /// Background colour and ambient light.
+    #[inline]
+    pub fn background(&self) -> &Background {
+        &self.background
+    }
+
+    /// Rendering-space-to-object matrices, indexed by
+    /// [`Primitive::instance`]; entry 0 is the rendering-to-world
+    /// translation.
+    #[inline]
+    pub fn object_from_world(&self) -> &[Mat4] {
+        &self.object_from_world
+    }
+
+    /// Milliseconds spent building the aggregate.
+    pub fn build_ms(&self) -> f64 {
+        self.build_ms
+    }
+
+    /// The scene's object tree over the primitives, as flattening met it.
+    pub fn scene_tree(&self) -> &crate::accel::SceneTree {
+        &self.scene_tree
+    }
+
     /// Closest hit with `tmin < t < tmax`.
     pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> Option<Hit> {
         let mut best = (self.accel).intersect_barycentric(&self.prims, ray, tmin, tmax, c);
@@ -122,11 +212,16 @@ impl World {
                 (Shape::Triangle(tr), Some(b)) => tr.surface_at(b),
                 (shape, _) => shape.surface(ray, h.t),
             };
+            let shading_normal = match self.vertex_normals.get(h.prim as usize) {
+                Some(n) if n[0] != Vec3::ZERO => self.interpolated_normal(p, n, ray, bary, s.n),
+                _ => s.n,
+            };
             Hit {
                 t: h.t,
                 point: s.p,
                 error: s.error,
                 normal: s.n,
+                shading_normal,
                 prim: h.prim,
                 material: p.material,
                 instance: p.instance,
@@ -134,13 +229,80 @@ impl World {
         })
     }
 
-    /// What the world's light number `index` (`light`, i.e.
-    /// `&self.lights[index]`) sends to point `p`: `light::incident(light,
-    /// p)`, with a directional light's normalised direction prepared once
-    /// per world (and re-done should the light have changed since).
+    /// The vertex normals `n` of primitive `p` (a triangle) interpolated at
+    /// the hit's barycentrics (`bary`, or the watertight test run again
+    /// when the aggregate did not keep them), on the side of the geometric
+    /// normal `ng`.
+    #[cold]
+    fn interpolated_normal(
+        &self,
+        p: &Primitive,
+        n: &[Vec3; 3],
+        ray: &Ray,
+        bary: Option<[f32; 3]>,
+        ng: Vec3,
+    ) -> Vec3 {
+        let Shape::Triangle(tr) = &p.shape else {
+            return ng;
+        };
+        let Some(b) = bary.or_else(|| tr.hit(ray, f32::NEG_INFINITY, f32::INFINITY).map(|h| h.b))
+        else {
+            return ng;
+        };
+        let ns = (b[0] * n[0] + b[1] * n[1] + b[2] * n[2]).normalize_or(ng);
+        if ns.dot(ng) < 0.0 {
+            -ns
+        } else {
+            ns
+        }
+    }
+
+    /// What the world's light number `index` sends to point `p`:
+    /// `light::incident(&self.lights()[index], p)`, bit for bit, from the
+    /// light source prepared with the world.
     #[inline]
-    pub fn incident(&self, index: usize, light: &Light, p: Vec3) -> crate::light::Incident {
-        self.prepared_lights.incident(index, light, p)
+    pub fn incident(&self, index: usize, p: Vec3) -> Incident {
+        match self.sources[index].incident(p) {
+            Some(inc) => inc,
+            None => crate::light::incident(&self.lights[index], p),
+        }
+    }
+
+    /// The lights as the integrators that weigh samples use them, index for
+    /// index with [`lights`](Self::lights).
+    #[inline]
+    pub fn light_sources(&self) -> &[LightSource] {
+        &self.sources
+    }
+
+    /// Indices (into [`light_sources`](Self::light_sources)) of the lights
+    /// with a surface.
+    pub fn emitters(&self) -> &[u32] {
+        &self.emitters
+    }
+
+    /// The closest hit with `tmin < t < tmax` on the surface of an area
+    /// light, and which light it is. Area lights are not in the aggregate
+    /// ([`intersect`](Self::intersect) and [`occluded`](Self::occluded) do
+    /// not see them, so the Whitted tree's rays and statistics are what they
+    /// were); an integrator that sees emitters asks here too, with `tmax` at
+    /// its closest hit.
+    pub fn intersect_emitters(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        mut tmax: f32,
+    ) -> Option<(u32, EmitterHit)> {
+        let mut best = None;
+        for &i in &self.emitters {
+            if let LightSource::Area(a) = &self.sources[i as usize] {
+                if let Some(h) = a.intersect(ray, tmin, tmax) {
+                    tmax = h.t;
+                    best = Some((i, h));
+                }
+            }
+        }
+        best
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
@@ -231,5 +393,85 @@ impl World {
     /// Bounds of the bounded primitives (planes excluded).
     pub fn bounds(&self) -> Aabb {
         self.accel.bounds()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{AreaShape, Node, Scene, ShapeDesc as Desc};
+
+    /// A quad light over a sphere: the aggregate and the occlusion test see
+    /// only the sphere (the Whitted tree's rays are what they were), and
+    /// `intersect_emitters` finds the light with its radiance, nearest first
+    /// and only within `tmax`.
+    #[test]
+    fn emitters_are_seen_only_on_request() {
+        let quad = AreaShape::Quad {
+            corner: Vec3::new(-1.0, 3.0, -1.0),
+            edge1: Vec3::new(2.0, 0.0, 0.0),
+            edge2: Vec3::new(0.0, 0.0, 2.0),
+        };
+        let scene = Scene {
+            camera: Camera::Orthographic {
+                center: Vec3::ZERO,
+                direction: Vec3::NEG_Z,
+                up: Vec3::Y,
+                size: 1.0,
+            },
+            lights: vec![
+                Light::Point {
+                    position: Vec3::new(0.0, 5.0, 0.0),
+                    color: Vec3::ONE,
+                    attenuation: Vec3::X,
+                },
+                Light::Area {
+                    shape: quad,
+                    color: Vec3::ONE,
+                    power: 8.0,
+                },
+            ],
+            background: Background::default(),
+            materials: vec![],
+            root: Node::Group(vec![Node::Shape {
+                shape: Desc::Sphere {
+                    center: Vec3::ZERO,
+                    radius: 1.0,
+                },
+                material: None,
+            }]),
+            effects: Default::default(),
+        };
+        let world = World::build_world_space(&scene, BuildOptions::default());
+        assert_eq!(world.emitters(), &[1]);
+        assert_eq!(world.light_sources().len(), 2);
+        let mut c = Counters::default();
+        let up = Ray::new(Vec3::new(0.2, 1.5, 0.1), Vec3::Y);
+        assert!(world.intersect(&up, 0.0, f32::INFINITY, &mut c).is_none());
+        assert!(!world.occluded(&up, 0.0, f32::INFINITY, &mut c));
+        let (i, h) = world.intersect_emitters(&up, 0.0, f32::INFINITY).unwrap();
+        assert_eq!(i, 1);
+        assert!(
+            (h.t - 1.5).abs() < 1e-6 && (h.at.p.y - 3.0).abs() < 1e-6,
+            "{h:?}"
+        );
+        // Power 8 over both faces of a 2 × 2 quad: radiance 8/(π·8).
+        assert!(
+            (h.le - Vec3::splat(1.0 / std::f32::consts::PI))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert!(world.intersect_emitters(&up, 0.0, 1.4).is_none());
+        // From below the sphere, the light is still there (the caller limits
+        // `tmax` to its own closest hit).
+        let from_below = Ray::new(Vec3::new(0.0, -2.0, 0.0), Vec3::Y);
+        let hit = world
+            .intersect(&from_below, 0.0, f32::INFINITY, &mut c)
+            .unwrap();
+        assert!(world.intersect_emitters(&from_below, 0.0, hit.t).is_none());
+        assert!(world
+            .intersect_emitters(&from_below, 0.0, f32::INFINITY)
+            .is_some());
     }
 }

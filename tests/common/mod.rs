@@ -5,7 +5,7 @@
 
 use glint::integrator::{Integrator, RayObserver};
 use glint::math::{Ray, Vec2, Vec3};
-use glint::render::Sampler;
+use glint::sampler::Sampler;
 use glint::stats::Counters;
 use glint::world::{Hit, World};
 use std::path::{Path, PathBuf};

@@ -12,7 +12,7 @@ use glint::format::{load_scene, obj::load_obj};
 use glint::integrator::Whitted;
 use glint::math::Vec3;
 use glint::render::{render, CameraModel, PixelOffset};
-use glint::scene::{Node, Scene, Shape};
+use glint::scene::{Node, Scene, ShapeDesc};
 use glint::world::{BuildOptions, World};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -46,7 +46,7 @@ const ACCELS: [AccelKind; 10] = [
     AccelKind::Bvh(Split::Median),
     AccelKind::Bvh(Split::Sah),
     AccelKind::BvhHierarchy,
-    AccelKind::Bvh4,
+    AccelKind::Bvh8,
 ];
 
 /// One scene to bench, flattened or not (`--no-flatten` rows show what the
@@ -208,8 +208,8 @@ fn measure(
         let t = Instant::now();
         let world = World::build(scene, BuildOptions { accel, flatten });
         builds.push(t.elapsed().as_secs_f64() * 1e3);
-        memory = world.accel.memory_bytes();
-        let cam = CameraModel::new(&world.camera);
+        memory = world.accel().memory_bytes();
+        let cam = CameraModel::new(world.camera());
         let t = Instant::now();
         let (_, c) = render(&world, &cam, integrator, (size, size), PixelOffset::CENTER);
         renders.push(t.elapsed().as_secs_f64() * 1e3);
@@ -278,7 +278,7 @@ fn stadium_scene(mesh: &Path, floor: Option<(f32, f32)>) -> Result<Scene, String
         Vec3::new(-w, y, w),
     ];
     let floor = |a: usize, b: usize, c: usize| Node::Shape {
-        shape: Shape::Triangle([corners[a], corners[b], corners[c]]),
+        shape: ShapeDesc::Triangle([corners[a], corners[b], corners[c]]),
         material: Some(0),
     };
     scene.root = Node::Group(vec![scene.root, floor(0, 2, 1), floor(0, 3, 2)]);

@@ -191,7 +191,7 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
         println!("{v}");
     } else {
         println!(
-            "# glint bvh4 mesh={} tris={tris} threads={threads} (obj load {load_ms:.0} ms)",
+            "# glint bvh8 mesh={} tris={tris} threads={threads} (obj load {load_ms:.0} ms)",
             a.mesh.display()
         );
         println!(

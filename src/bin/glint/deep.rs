@@ -4,7 +4,7 @@
 //! same scene.
 
 use glint::math::{Mat4, Vec3};
-use glint::scene::{Mesh, Node, Scene, Shape};
+use glint::scene::{Mesh, Node, Scene, ShapeDesc};
 use std::f32::consts::TAU;
 use std::sync::Arc;
 
@@ -15,7 +15,7 @@ fn xf(matrix: Mat4, child: Node) -> Node {
     }
 }
 
-fn shape(shape: Shape, material: usize) -> Node {
+fn shape(shape: ShapeDesc, material: usize) -> Node {
     Node::Shape {
         shape,
         material: Some(material),
@@ -65,13 +65,13 @@ fn branch(depth: u32, branching: u32, leaf: &Arc<Mesh>, seed: u32) -> Node {
     if depth == 0 {
         return xf(
             Mat4::from_scale(Vec3::splat(0.9)),
-            shape(Shape::Mesh(leaf.clone()), 1),
+            shape(ShapeDesc::Mesh(leaf.clone()), 1),
         );
     }
     let stem = xf(
         Mat4::from_translation(Vec3::Y) * Mat4::from_scale(Vec3::new(0.15, 1.0, 0.15)),
         shape(
-            Shape::Sphere {
+            ShapeDesc::Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,
             },
@@ -114,7 +114,7 @@ pub fn instances(mesh: Mesh, n: u32) -> Scene {
                 let turn = 0.7 * (i + 2 * j + 3 * k) as f32;
                 xf(
                     Mat4::from_rotation_y(turn) * Mat4::from_translation(-b.center()),
-                    shape(Shape::Mesh(mesh.clone()), 1),
+                    shape(ShapeDesc::Mesh(mesh.clone()), 1),
                 )
             })
         })

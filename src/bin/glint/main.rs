@@ -6,7 +6,8 @@ use glint::format::load_scene;
 use glint::job::Job;
 use glint::limits;
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, Sampler, SamplerKind};
+use glint::render::{Adaptive, Filter};
+use glint::sampler::{Sampler, SamplerKind};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -27,6 +28,7 @@ mod bench_rays;
 mod deep;
 mod merge;
 mod raytree;
+mod serve;
 mod structure;
 mod traverse;
 
@@ -72,9 +74,11 @@ enum Command {
     Structure(structure::StructureArgs),
     /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
     Merge(merge::MergeArgs),
+    /// Serve the scene live in a browser on 127.0.0.1: progressive render, click a pixel for its ray tree.
+    Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
-        /// Scene file (MIT 6.837 format).
+        /// Scene file (MIT 6.837 format) or a bare .obj mesh.
         scene: PathBuf,
     },
 }
@@ -111,7 +115,12 @@ linear 32-bit values unclamped. An unsupported extension is refused before any w
 
 The eye ray of each pixel goes through the pixel's centre. The `raytracer` command, which \
 runs the course's command lines verbatim, uses the pixel's lower-left corner instead, the \
-course's convention, which its reference images match exactly.";
+course's convention, which its reference images match exactly.
+
+Conventions (docs/scene-format.md, \"Conventions\"): a pixel is diffuse colour x irradiance, with no \
+1/pi; a flat area light's power is shared by its two faces; an orthographic camera sees objects \
+behind its centre plane (rays start at t = -inf, as in the course), a perspective camera does not; \
+`aperture` is the lens radius and the focus is a plane at `focusDistance` along the view direction.";
 
 #[derive(Args)]
 struct RenderArgs {
@@ -120,12 +129,15 @@ struct RenderArgs {
     /// Output image: .png, .tga, .ppm, .bmp (8-bit); .exr, .pfm (unclamped float).
     #[arg(short, long)]
     output: PathBuf,
+    /// Encode 8-bit outputs (.png .tga .ppm .bmp) with the sRGB curve, rounded, and mark PNGs sRGB, as image viewers assume. The default stores the linear values truncated to bytes, the course's convention: raytracer's reference images, glint's thumbnails and image hashes compare byte for byte across both commands. .exr/.pfm stay linear.
+    #[arg(long)]
+    srgb: bool,
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
     size: Vec<u32>,
-    /// Maximum number of reflection/refraction bounces (0 to 64).
-    #[arg(long, default_value_t = 5)]
-    bounces: u32,
+    /// Maximum number of reflection/refraction bounces (0 to 64; default 5). With --integrator path: scattering events per path (default 64; 0 shows emitters only, 1 direct light).
+    #[arg(long)]
+    bounces: Option<u32>,
     /// Prune ray-tree branches contributing less than this (finite, >= 0).
     #[arg(long, default_value_t = 0.01)]
     weight: f32,
@@ -144,12 +156,15 @@ struct RenderArgs {
     /// Print statistics.
     #[arg(long)]
     stats: bool,
-    /// Accelerator: bvh4 (the fast default), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
-    #[arg(long, default_value = "bvh4")]
+    /// Accelerator: bvh8 (the fast default; bvh4 is an alias), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy.
+    #[arg(long, default_value = "bvh8")]
     accel: AccelKind,
     /// Keep the transform hierarchy instead of baking it into world space (to measure flattening).
     #[arg(long)]
     no_flatten: bool,
+    /// Smooth shading for every mesh: vertex normals interpolated across triangles, computed (angle-weighted) for meshes whose file has none. Meshes whose file gives normals (PLY, glTF) are smooth without it.
+    #[arg(long)]
+    smooth: bool,
     /// Write statistics as JSON to this file.
     #[arg(long, value_name = "FILE")]
     stats_json: Option<PathBuf>,
@@ -174,7 +189,7 @@ struct RenderArgs {
     /// Seed of the random samplers (changes the noise, not its statistics).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma).
+    /// Reconstruction filter: box:R, tent:R or gaussian:SIGMA (radius in pixels; gaussian cut at 2 sigma, a round kernel; `raytracer -gaussian_filter` keeps the course's square kernel, also gaussian-square:SIGMA).
     #[arg(long, default_value = "box:0.5")]
     filter: Filter,
     /// Whitted's adaptive supersampling: split a pixel square where its corners differ by more than this (0..1).
@@ -228,7 +243,7 @@ struct RenderArgs {
     /// Ambient-occlusion rays per shaded point (overrides the scene's AmbientOcclusion).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
     ao_samples: Option<u32>,
-    /// What to compute: whitted (shaded image) or ao (grey ambient-occlusion image).
+    /// What to compute: whitted (shaded image), ao (grey ambient-occlusion image) or path (path tracing with light sampling and MIS; see docs/path-tracing.md).
     #[arg(long, value_enum, default_value_t = IntegratorName::Whitted)]
     integrator: IntegratorName,
 }
@@ -238,6 +253,7 @@ struct RenderArgs {
 enum IntegratorName {
     Whitted,
     Ao,
+    Path,
 }
 
 /// Command-line names of [`TextureSpace`].
@@ -261,6 +277,7 @@ fn real_main() -> ExitCode {
         Command::Info { scene } => info(scene),
         Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
+        Command::Serve(a) => serve::run(a),
         Command::Traverse(a) => traverse::run(a),
         Command::Structure(a) => structure::run(a),
         Command::Bench {
@@ -322,6 +339,9 @@ fn render(a: RenderArgs) -> ExitCode {
         return ExitCode::from(2);
     }
     job.output = Some(a.output);
+    if a.srgb {
+        job.encoding = glint::output::Encoding::Srgb;
+    }
     job.integrator.shadows = a.shadows || a.transparent_shadows;
     job.integrator.transparent_shadows = a.transparent_shadows;
     job.integrator.shade_back = a.shade_back;
@@ -331,6 +351,7 @@ fn render(a: RenderArgs) -> ExitCode {
         Space::Object => TextureSpace::Object,
     };
     job.build.flatten = !a.no_flatten;
+    job.smooth = a.smooth;
     job.stats_json = a.stats_json;
     job.progress = !a.quiet && std::io::stdout().is_terminal();
     job.cancel = Some(glint::job::interrupt_flag());
@@ -373,6 +394,12 @@ fn render(a: RenderArgs) -> ExitCode {
         ao: a.ao_samples,
     };
     job.ao_image = a.integrator == IntegratorName::Ao;
+    if a.integrator == IntegratorName::Path {
+        job.path = Some(glint::integrator::PathSettings {
+            max_bounces: job.integrator.bounces,
+            ..Default::default()
+        });
+    }
     job.cost_image = a.cost_image;
     let size = (job.width, job.height);
     let piece = match (&a.tile, &a.tile_from_env, &a.crop) {
@@ -501,7 +528,12 @@ fn check_bench(size: u32, runs: usize, none_limit: f64) -> Result<(), String> {
 /// The numeric render flags, in their documented ranges ([`limits`]):
 /// `--weight nan` rendered before issue 15, `--threads 100000` hung.
 fn check_numbers(a: &RenderArgs, job: &mut Job) -> Result<(), String> {
-    job.integrator.bounces = limits::int_in("--bounces", a.bounces, 0, limits::MAX_BOUNCES)?;
+    let default_bounces = match a.integrator {
+        IntegratorName::Path => glint::integrator::PathSettings::default().max_bounces,
+        _ => 5,
+    };
+    let bounces = a.bounces.unwrap_or(default_bounces);
+    job.integrator.bounces = limits::int_in("--bounces", bounces, 0, limits::MAX_BOUNCES)?;
     job.integrator.weight_cutoff = limits::finite_in("--weight", a.weight, 0.0, f32::MAX)?;
     if let Some(n) = a.threads {
         let (n, note) = limits::threads("--threads", n, limits::cores())?;

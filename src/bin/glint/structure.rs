@@ -65,7 +65,10 @@ pub fn run(a: StructureArgs) -> ExitCode {
         _ => {
             return fail(
                 2,
-                format!("--accel {}: choose octree, octree-inner or a bvh", a.accel),
+                format!(
+                    "--accel {}: choose octree, octree-inner, bvh, bvh-median or bvh-midpoint (the 8-wide bvh8 is not drawn)",
+                    a.accel
+                ),
             )
         }
     };

@@ -80,7 +80,7 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
     let structure = Structure::build(&world, a.accel).ok_or((
         2,
         format!(
-            "--accel {}: no walk to record; choose grid, octree, octree-inner or a bvh",
+            "--accel {}: no walk to record; choose grid, nested-grid, octree, octree-inner, bvh, bvh-median, bvh-midpoint or bvh-hierarchy (bvh is the binary SAH BVH; the 8-wide bvh8 records no walk)",
             a.accel
         ),
     ))?;

@@ -66,11 +66,14 @@ impl<'a> Parser<'a> {
             "transparentColor",
             "indexOfRefraction",
             "glossiness",
+            "emittedColor",
         ];
         self.fields(kw, &names, |p, f| {
             match f.text {
                 "diffuseColor" => m.diffuse = p.color()?,
                 "specularColor" => m.specular = p.color()?,
+                // Radiance; the same range as every colour.
+                "emittedColor" => m.emission = p.color()?,
                 // At most 1: a ray's weight never grows down the tree, so
                 // 64 bounces cannot overflow a pixel.
                 "reflectiveColor" => m.reflective = p.vec3_within(1.0, "a reflectivity")?,

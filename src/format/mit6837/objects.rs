@@ -5,9 +5,9 @@ use super::cursor::{closing, plural, vec_text, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
 use crate::format::diagnostic::{io_reason, quote};
-use crate::format::obj::{self, LoadError};
+use crate::format::obj::LoadError;
 use crate::math::{Keyframe, Mat4, Motion, Quat, Vec3};
-use crate::scene::{Node, Shape};
+use crate::scene::{Node, ShapeDesc};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -249,7 +249,7 @@ impl<'a> Parser<'a> {
     }
 
     /// `Sphere { center V radius r }`, `r > 0`.
-    fn sphere(&mut self, kw: Token<'a>) -> Result<Shape> {
+    fn sphere(&mut self, kw: Token<'a>) -> Result<ShapeDesc> {
         let (mut center, mut radius) = (None, None);
         let close = self.fields(kw, &["center", "radius"], |p, f| {
             match f.text {
@@ -263,11 +263,11 @@ impl<'a> Parser<'a> {
         if radius <= 0.0 {
             return Err(self.error(Some(tok), "a positive radius"));
         }
-        Ok(Shape::Sphere { center, radius })
+        Ok(ShapeDesc::Sphere { center, radius })
     }
 
     /// `Plane { normal V offset d }`: the points `p` with `normal · p = d`.
-    fn plane(&mut self, kw: Token<'a>) -> Result<Shape> {
+    fn plane(&mut self, kw: Token<'a>) -> Result<ShapeDesc> {
         let (mut normal, mut offset) = (None, None);
         let close = self.fields(kw, &["normal", "offset"], |p, f| {
             match f.text {
@@ -285,12 +285,12 @@ impl<'a> Parser<'a> {
                 vec_text(&toks),
             ));
         }
-        Ok(Shape::Plane { normal, offset })
+        Ok(ShapeDesc::Plane { normal, offset })
     }
 
     /// `Triangle { vertex0 V vertex1 V vertex2 V }`. Degenerate triangles are
     /// allowed: they are harmless, and meshes are full of them.
-    fn triangle(&mut self, kw: Token<'a>) -> Result<Shape> {
+    fn triangle(&mut self, kw: Token<'a>) -> Result<ShapeDesc> {
         let mut v: [Option<Vec3>; 3] = [None; 3];
         let names = ["vertex0", "vertex1", "vertex2"];
         let close = self.fields(kw, &names, |p, f| {
@@ -302,39 +302,62 @@ impl<'a> Parser<'a> {
         for i in 0..3 {
             out[i] = self.require(v[i], close, names[i], kw)?;
         }
-        Ok(Shape::Triangle(out))
+        Ok(ShapeDesc::Triangle(out))
     }
 
-    /// `TriangleMesh { obj_file NAME }`, NAME relative to the scene's folder.
-    /// Each file is loaded once per scene and shared.
-    fn mesh(&mut self, kw: Token<'a>) -> Result<Shape> {
+    /// `TriangleMesh { obj_file NAME [smooth] }`, NAME relative to the
+    /// scene's folder: an OBJ, PLY or glTF file (by its extension, see
+    /// `format::load_mesh_file`). `smooth` shades it with vertex normals,
+    /// computed (angle-weighted) where the file has none. Each file is
+    /// loaded once per scene and shared.
+    fn mesh(&mut self, kw: Token<'a>) -> Result<ShapeDesc> {
         let mut name = None;
-        let close = self.fields(kw, &["obj_file"], |p, _| {
-            name = Some(p.word("an OBJ file name")?);
+        let mut smooth = false;
+        let close = self.fields(kw, &["obj_file", "smooth"], |p, f| {
+            if f.text == "smooth" {
+                smooth = true;
+            } else {
+                name = Some(p.word("a mesh file name (.obj, .ply, .gltf or .glb)")?);
+            }
             Ok(())
         })?;
         let name = self.require(name, close, "obj_file", kw)?;
         let path = self.file.parent().unwrap_or(Path::new("")).join(name.text);
-        if let Some(mesh) = self.meshes.get(&path) {
-            return Ok(Shape::Mesh(Arc::clone(mesh)));
-        }
-        let mesh = match obj::load(&path) {
-            Ok(m) => Arc::new(m),
-            Err(LoadError::Io(e)) => {
-                // The token may be shortened by `quote`; the path it resolved
-                // to is shown in full, so the user sees where glint looked.
-                let found = format!(
-                    "{} ({}) at {}",
-                    quote(name.text),
-                    io_reason(&e),
-                    path.display()
-                );
-                return Err(self.error_found(Some(name), "a readable OBJ file", found));
+        let mesh = match self.meshes.get(&path) {
+            Some(mesh) => Arc::clone(mesh),
+            None => {
+                let loaded = match self.gate {
+                    Some(gate) => gate(&path)
+                        .map_err(LoadError::Io)
+                        .and_then(|p| crate::format::load_mesh_file(&p)),
+                    None => crate::format::load_mesh_file(&path),
+                };
+                let mesh = match loaded {
+                    Ok(m) => Arc::new(m),
+                    Err(LoadError::Io(e)) => {
+                        // The token may be shortened by `quote`; the path it
+                        // resolved to is shown in full, so the user sees
+                        // where glint looked.
+                        let found = format!(
+                            "{} ({}) at {}",
+                            quote(name.text),
+                            io_reason(&e),
+                            path.display()
+                        );
+                        let expected = crate::format::MeshKind::of(&path)
+                            .map_or("a readable OBJ file", |k| k.expected());
+                        return Err(self.error_found(Some(name), expected, found));
+                    }
+                    Err(LoadError::Parse(e)) => return Err(e),
+                };
+                self.meshes.insert(path, Arc::clone(&mesh));
+                mesh
             }
-            Err(LoadError::Parse(e)) => return Err(e),
         };
-        self.meshes.insert(path, Arc::clone(&mesh));
-        Ok(Shape::Mesh(mesh))
+        if smooth && mesh.normals.is_empty() {
+            return Ok(ShapeDesc::Mesh(Arc::new(mesh.with_computed_normals())));
+        }
+        Ok(ShapeDesc::Mesh(mesh))
     }
 }
 

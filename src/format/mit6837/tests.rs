@@ -4,7 +4,9 @@
 use super::parse;
 use crate::format::ParseError;
 use crate::math::{Mat4, Vec3};
-use crate::scene::{Background, Camera, Light, Material, Node, Phong, Scene, Shape, TextureKind};
+use crate::scene::{
+    Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc, TextureKind,
+};
 use std::path::Path;
 
 const CAMERA: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n";
@@ -18,7 +20,7 @@ fn error(src: &str) -> ParseError {
 }
 
 /// The `(shape, material)` leaves in file order.
-fn leaves(n: &Node, out: &mut Vec<(Shape, Option<usize>)>) {
+fn leaves(n: &Node, out: &mut Vec<(ShapeDesc, Option<usize>)>) {
     match n {
         Node::Group(c) => c.iter().for_each(|c| leaves(c, out)),
         Node::Transform { child, .. } | Node::Moving { child, .. } => leaves(child, out),
@@ -110,8 +112,60 @@ fn materials_defaults_and_fields() {
         transparent: Vec3::splat(0.5),
         ior: 1.5,
         glossiness: 0.0,
+        emission: Vec3::ZERO,
     };
     assert_eq!(s.materials[2], Material::Phong(want));
+}
+
+/// `emittedColor`: a radiance on any material, blended by textures like
+/// every other field, absent from the course's materials.
+#[test]
+fn emitted_color() {
+    let s = scene(&format!(
+        "{CAMERA}Materials {{ numMaterials 4\n PhongMaterial {{ diffuseColor 0 0 0 emittedColor 17 12 4 }}\n\
+         Material {{ emittedColor 0.5 0 10000 diffuseColor .2 .2 .2 }}\n PhongMaterial {{ }}\n\
+         Checkerboard {{ materialIndex 0 materialIndex 2 }} }}\nGroup {{ numObjects 0 }}"
+    ));
+    let Material::Phong(a) = &s.materials[0] else {
+        panic!("{:?}", s.materials[0])
+    };
+    assert_eq!(a.emission, Vec3::new(17.0, 12.0, 4.0));
+    assert_eq!(a.diffuse, Vec3::ZERO);
+    let Material::Phong(b) = &s.materials[1] else {
+        panic!("{:?}", s.materials[1])
+    };
+    assert_eq!(b.emission, Vec3::new(0.5, 0.0, 10000.0));
+    assert_eq!(s.materials[2], Material::Phong(Phong::default()));
+    assert_eq!(Phong::default().emission, Vec3::ZERO);
+    let half = a.lerp(&Phong::default(), 0.5);
+    assert_eq!(half.emission, Vec3::new(8.5, 6.0, 2.0));
+    // (input, the token the error points at, the message)
+    for (bad, at, want) in [
+        (
+            "emittedColor -1 0 0",
+            "-1",
+            "expected a colour component from 0 to 10000, found '-1'",
+        ),
+        (
+            "emittedColor 1 1 10001",
+            "10001",
+            "from 0 to 10000, found '10001'",
+        ),
+        ("emittedColor 1 1 }", "}", "expected a number, found '}'"),
+        (
+            "emittedColor 1 1 1 emittedColor 2 2 2",
+            "emittedColor 2",
+            "emittedColor",
+        ),
+    ] {
+        let head = "Materials { numMaterials 1 PhongMaterial { ";
+        let e = error(&format!(
+            "{CAMERA}{head}{bad} }} }}\nGroup {{ numObjects 0 }}"
+        ));
+        assert!(e.to_string().contains(want), "{bad}: {e}");
+        let col = head.len() + bad.find(at).unwrap() + 1;
+        assert_eq!((e.line, e.col), (2, col), "{bad}: {e}");
+    }
 }
 
 #[test]
@@ -185,19 +239,19 @@ fn objects() {
     leaves(&s.root, &mut l);
     assert_eq!(
         l[0].0,
-        Shape::Sphere {
+        ShapeDesc::Sphere {
             center: Vec3::new(1.0, 2.0, 3.0),
             radius: 2.0
         }
     );
     assert_eq!(
         l[1].0,
-        Shape::Plane {
+        ShapeDesc::Plane {
             normal: Vec3::Y,
             offset: -1.0
         }
     );
-    assert_eq!(l[2].0, Shape::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]));
+    assert_eq!(l[2].0, ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]));
     let Node::Group(top) = &s.root else { panic!() };
     assert!(
         matches!(&top[3], Node::Transform { matrix, child } if *matrix == Mat4::from_translation(Vec3::X) && **child == Node::Group(vec![]))
@@ -463,7 +517,7 @@ fn meshes_used_twice_are_loaded_once() {
     let meshes: Vec<_> = l
         .iter()
         .filter_map(|(sh, _)| match sh {
-            Shape::Mesh(m) => Some(m.clone()),
+            ShapeDesc::Mesh(m) => Some(m.clone()),
             _ => None,
         })
         .collect();

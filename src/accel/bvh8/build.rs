@@ -1,0 +1,765 @@
+//! Building the 8-wide BVH: binned SAH splits (in parallel for large nodes),
+//! each node taking up to eight children by splitting its largest child
+//! again, then the leaves' triangles copied into four-wide blocks.
+
+use super::lanes::W;
+use super::node::{is_leaf, leaf, leaf_range, Node, Tri4, EMPTY, MAX_LEAF_ITEMS, OTHER};
+use super::pages::huge_pages;
+use crate::accel::overlap::margin;
+use crate::math::{Aabb, Vec3};
+use glam::{Vec3A, Vec4};
+use rayon::prelude::*;
+
+#[path = "build_partition.rs"]
+mod partition;
+use partition::*;
+
+/// What one item of the source is.
+pub(crate) enum Item {
+    /// A triangle (tested four at a time in the leaves).
+    Triangle([Vec3; 3]),
+    /// Something else with these bounds, tested through the fallback.
+    Other(Aabb),
+    /// Never hit (a degenerate triangle): left out of the tree.
+    Skip,
+}
+
+/// The items a BVH is built over. Ids are what the traversal reports (the
+/// world's primitive indices, a mesh's triangle indices).
+pub(crate) trait Source: Sync {
+    /// How many items.
+    fn count(&self) -> usize;
+    /// The id of the `k`-th item.
+    fn id(&self, k: usize) -> u32;
+    /// The item with id `id`.
+    fn item(&self, id: u32) -> Item;
+    /// The vertices of item `id`, which [`Source::item`] called a triangle
+    /// (filling the leaves: without `item`'s degeneracy check again).
+    fn vertices(&self, id: u32) -> [Vec3; 3];
+    /// A hint that `vertices(id)` will be asked for soon (no effect on
+    /// results; by default nothing).
+    fn prefetch(&self, _id: u32) {}
+}
+
+/// Bins per axis of the SAH sweep.
+const BINS: usize = 32;
+/// Cost of a binary split step relative to testing one block of four items.
+/// On the 8-wide tree 0.3, 0.5, 0.8 and 1.2 once measured the same within
+/// noise; with the host's memory slower, 1.0 with leaves of up
+/// to 16 items gave incoherent rays 5-14% more (fewer node levels, each a
+/// cache miss on a large mesh), primary and shadow rays the same, and 8-13%
+/// fewer bytes per triangle.
+const SPLIT_COST: f32 = 1.0;
+/// Below this many items a node's subtrees are built on one thread.
+const PARALLEL_ITEMS: usize = 16 * 1024;
+/// Binning is split over threads above this many items.
+const PARALLEL_BINNING: usize = 64 * 1024;
+/// Deepest node level: the traversal stack holds at most `(W − 1) · depth`
+/// pending children.
+pub(crate) const MAX_DEPTH: usize = 20;
+
+/// One item during the build: its box, with its id and kind in the fourth
+/// lanes (32 bytes). Each corner is one aligned 16-byte load that is
+/// already a `Vec3A` (three 4-byte fields and an id took four instructions
+/// per corner to load, and the partition's swap then stalled reloading
+/// them). The fourth lanes hold small integers as floats (never denormal,
+/// which would slow the arithmetic that carries them along unused).
+#[derive(Clone, Copy, Debug)]
+struct PrimRef {
+    /// Lower corner; `w`: the id's low 16 bits.
+    lo: Vec4,
+    /// Upper corner; `w`: the id's high 15 bits, plus `2^15` for an item
+    /// that is not a triangle, or `−1` for one left out.
+    hi: Vec4,
+}
+
+impl PrimRef {
+    /// The flag in `hi.w` of an item that is not a triangle.
+    const OTHER_W: u32 = 1 << 15;
+
+    /// Item `id` (below 2^31) with box `b`.
+    fn new(b: &Aabb, id: u32, other: bool) -> Self {
+        debug_assert!(id & OTHER == 0);
+        let high = (id >> 16) | if other { Self::OTHER_W } else { 0 };
+        PrimRef {
+            lo: b.min.extend((id & 0xffff) as f32),
+            hi: b.max.extend(high as f32),
+        }
+    }
+
+    /// A placeholder for an item that is left out.
+    fn skipped() -> Self {
+        PrimRef {
+            lo: Vec4::ZERO,
+            hi: Vec4::new(0.0, 0.0, 0.0, -1.0),
+        }
+    }
+
+    fn is_skipped(&self) -> bool {
+        self.hi.w < 0.0
+    }
+
+    #[inline(always)]
+    fn lo(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo)
+    }
+
+    #[inline(always)]
+    fn hi(&self) -> Vec3A {
+        Vec3A::from_vec4(self.hi)
+    }
+
+    #[inline(always)]
+    fn centroid(&self) -> Vec3A {
+        (self.lo() + self.hi()) * 0.5
+    }
+
+    fn id(&self) -> u32 {
+        self.lo.w as u32 | (self.hi.w as u32 & (Self::OTHER_W - 1)) << 16
+    }
+
+    /// Whether the item is not a triangle.
+    fn other(&self) -> bool {
+        self.hi.w as u32 & Self::OTHER_W != 0
+    }
+}
+
+/// A contiguous range of references: its bounds, its centroids' bounds.
+#[derive(Clone, Copy, Debug)]
+struct Range {
+    begin: usize,
+    end: usize,
+    bounds: Aabb,
+    cbounds: Aabb,
+}
+
+impl Range {
+    fn len(&self) -> usize {
+        self.end - self.begin
+    }
+}
+
+/// How to divide a range.
+#[derive(Clone, Copy, Debug)]
+enum Plan {
+    /// Items whose centroid falls below bin `pos` (of `bins`) of `axis` go left.
+    Bin {
+        axis: usize,
+        pos: usize,
+        bins: usize,
+    },
+    /// Equal halves along the centroids' longest axis.
+    Median { axis: usize },
+}
+
+/// The built tree (see `Bvh8`).
+pub(crate) struct Built {
+    pub nodes: Vec<Node>,
+    pub tris: Vec<Tri4>,
+    pub bounds: Aabb,
+}
+
+/// Builds the tree over every item of `src`.
+pub(crate) fn build<S: Source>(src: &S) -> Built {
+    let n = src.count();
+    assert!(
+        n < 1 << 28 && (0..n).all(|k| src.id(k) & OTHER == 0),
+        "the fast BVH holds fewer than 2^28 primitives, with ids below 2^31 (got {n})"
+    );
+    // An indexed map writes straight into the vector (a filtering
+    // collect would gather pieces and copy them); skipped items are
+    // dropped afterwards in place.
+    let mut refs: Vec<PrimRef> = Vec::with_capacity(n);
+    huge_pages(&refs);
+    refs.par_extend((0..n).into_par_iter().with_min_len(4096).map(|k| {
+        let id = src.id(k);
+        match src.item(id) {
+            Item::Triangle(v) => PrimRef::new(&Aabb::from_points(v), id, false),
+            Item::Other(b) => PrimRef::new(&b, id, true),
+            Item::Skip => PrimRef::skipped(),
+        }
+    }));
+    // One pass for the bounds, which also finds any item left out (rare:
+    // then a second pass drops them).
+    let (bounds, cbounds, skipped) = root_bounds(&refs);
+    if skipped {
+        refs.retain(|r| !r.is_skipped());
+    }
+    if refs.is_empty() {
+        return Built {
+            nodes: Vec::new(),
+            tris: Vec::new(),
+            bounds: Aabb::EMPTY,
+        };
+    }
+    let builder = Builder {
+        pad: Vec3::splat(margin(&bounds)),
+    };
+    let all = Range {
+        begin: 0,
+        end: refs.len(),
+        bounds,
+        cbounds,
+    };
+    let plan = builder.plan(&refs, &all, 0);
+    // About one node per 6-7 items (measured on sphere1m): reserve enough
+    // that the vector never moves (unused capacity costs no memory).
+    let mut nodes = Vec::with_capacity(refs.len() / 4 + 1);
+    huge_pages(&nodes);
+    let root = builder.subtree(&mut refs, all, plan, 0, &mut nodes);
+    if is_leaf(root) {
+        // A tree of one leaf still starts at a node.
+        let mut node = Node::EMPTY;
+        builder.set_child(&mut node, 0, root, &all);
+        nodes.push(node);
+    }
+    let tris = fill_leaves(&mut nodes, &refs, src);
+    Built {
+        nodes,
+        tris,
+        bounds,
+    }
+}
+
+/// Node levels of a built tree (0 when empty): parents precede their
+/// children in `nodes`, so one pass in order finds every node's level.
+pub(crate) fn depth(nodes: &[Node]) -> usize {
+    let mut level = vec![0u8; nodes.len()];
+    let mut deepest = 0;
+    for (i, n) in nodes.iter().enumerate() {
+        let l = level[i].saturating_add(1);
+        deepest = deepest.max(l as usize);
+        for &c in &n.child {
+            if !is_leaf(c) {
+                debug_assert!(c as usize > i);
+                level[c as usize] = l;
+            }
+        }
+    }
+    deepest
+}
+
+/// Bounds of the boxes and of the centroids.
+fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
+    let one = |r: &[PrimRef]| {
+        r.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), p| {
+            (
+                Aabb::new(b.min.min(p.lo.truncate()), b.max.max(p.hi.truncate())),
+                c.grow(p.centroid().into()),
+            )
+        })
+    };
+    if refs.len() < PARALLEL_BINNING {
+        return one(refs);
+    }
+    refs.par_chunks(8192).map(one).reduce(
+        || (Aabb::EMPTY, Aabb::EMPTY),
+        |a, b| (a.0.union(&b.0), a.1.union(&b.1)),
+    )
+}
+
+/// Bounds and centroid bounds of the items not left out, and whether any
+/// was.
+fn root_bounds(refs: &[PrimRef]) -> (Aabb, Aabb, bool) {
+    let one = |r: &[PrimRef]| {
+        let (mut acc, mut skipped) = (Acc::new(), false);
+        for p in r {
+            if p.is_skipped() {
+                skipped = true;
+            } else {
+                acc.add(p.lo(), p.hi(), p.centroid());
+            }
+        }
+        (acc, skipped)
+    };
+    let (acc, skipped) = if refs.len() < PARALLEL_BINNING {
+        one(refs)
+    } else {
+        refs.par_chunks(8192)
+            .map(one)
+            .reduce(|| (Acc::new(), false), |a, b| (a.0.union(&b.0), a.1 | b.1))
+    };
+    let (b, c) = acc.boxes();
+    (b, c, skipped)
+}
+
+/// Blocks of four a leaf of `n` items needs: the SAH counts blocks, not
+/// items, so leaves come out full.
+#[inline]
+fn blocks(n: usize) -> f32 {
+    n.div_ceil(4) as f32
+}
+
+/// Per-axis bins: item counts and box bounds. `B` bins: small ranges use
+/// fewer, because clearing and sweeping 32 bins costs more than binning a
+/// handful of items (most nodes of a tree are small).
+#[derive(Clone)]
+struct Bins<const B: usize> {
+    count: [[u32; B]; 3],
+    lo: [[Vec3A; B]; 3],
+    hi: [[Vec3A; B]; 3],
+}
+
+impl<const B: usize> Bins<B> {
+    fn new() -> Self {
+        Bins {
+            count: [[0; B]; 3],
+            lo: [[Vec3A::INFINITY; B]; 3],
+            hi: [[Vec3A::NEG_INFINITY; B]; 3],
+        }
+    }
+
+    fn add(&mut self, refs: &[PrimRef], map: &BinMap) {
+        for r in refs {
+            let (lo, hi) = (r.lo(), r.hi());
+            // The centroid lane-wise: the same operations as `centroid`.
+            let k = map.bins::<B>((lo + hi) * 0.5);
+            for a in 0..3 {
+                let k = k[a];
+                self.count[a][k] += 1;
+                self.lo[a][k] = self.lo[a][k].min(lo);
+                self.hi[a][k] = self.hi[a][k].max(hi);
+            }
+        }
+    }
+
+    fn merge(mut self, o: Self) -> Self {
+        for a in 0..3 {
+            for k in 0..B {
+                self.count[a][k] += o.count[a][k];
+                self.lo[a][k] = self.lo[a][k].min(o.lo[a][k]);
+                self.hi[a][k] = self.hi[a][k].max(o.hi[a][k]);
+            }
+        }
+        self
+    }
+}
+
+/// Centroid → bin, per axis, for `B` bins (the scale assumes 1; `bins`
+/// multiplies by `B`).
+struct BinMap {
+    min: Vec3,
+    scale: Vec3,
+}
+
+impl BinMap {
+    fn new(cb: &Aabb) -> Self {
+        let e = cb.extent();
+        // Just under 1 so that the largest centroid lands in the last bin.
+        let s = 1.0 - 1e-6;
+        BinMap {
+            min: cb.min,
+            scale: Vec3::select(e.cmpgt(Vec3::ZERO), Vec3::splat(s) / e, Vec3::ZERO),
+        }
+    }
+
+    #[inline]
+    fn bins<const B: usize>(&self, c: Vec3A) -> [usize; 3] {
+        let k = (c - Vec3A::from(self.min)) * Vec3A::from(self.scale) * B as f32;
+        // Clamped to [0, B - 1] in float, lane-wise (NaN gives 0: `max`
+        // returns its argument when a lane is NaN), then truncated: the
+        // same bins as truncating first and clamping the integer (B - 1 is
+        // an integer), but the conversion is a plain 32-bit one (a
+        // saturating f32-to-usize conversion per axis was a tenth of the
+        // build's time).
+        let k = k.max(Vec3A::ZERO).min(Vec3A::splat((B - 1) as f32));
+        truncate::<B>(k)
+    }
+}
+
+/// The integer parts of `k`'s lanes, each in `[0, B − 1]` (so the mask
+/// changes nothing and spares the bins' bounds checks). On x86-64 one SSE2
+/// conversion of the vector (`cvttps2dq`, where `as i32` adds saturation
+/// and NaN checks per lane that the clamp has made useless); elsewhere `as
+/// i32`. Both truncate, so the bins are the same.
+#[inline(always)]
+fn truncate<const B: usize>(k: Vec3A) -> [usize; 3] {
+    const { assert!(B.is_power_of_two()) };
+    #[cfg(target_arch = "x86_64")]
+    let [x, y, z] = {
+        use std::arch::x86_64::{_mm_cvtsi128_si32, _mm_cvttps_epi32, _mm_shuffle_epi32};
+        // SAFETY: these intrinsics need only SSE2, which every x86-64 CPU
+        // has (it is in the x86_64 baseline Rust compiles for, so
+        // `cfg(target_arch = "x86_64")` implies it); they touch no memory.
+        unsafe {
+            let v = _mm_cvttps_epi32(k.into());
+            [
+                _mm_cvtsi128_si32(v),
+                _mm_cvtsi128_si32(_mm_shuffle_epi32::<0b01_01_01_01>(v)),
+                _mm_cvtsi128_si32(_mm_shuffle_epi32::<0b10_10_10_10>(v)),
+            ]
+        }
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let [x, y, z] = [k.x as i32, k.y as i32, k.z as i32];
+    [
+        x as usize & (B - 1),
+        y as usize & (B - 1),
+        z as usize & (B - 1),
+    ]
+}
+
+/// Bins for ranges of fewer than `SMALL_RANGE` items.
+const SMALL_BINS: usize = 8;
+/// See [`SMALL_BINS`].
+const SMALL_RANGE: usize = 64;
+
+/// The cheapest plane over `B` bins (see [`sweep`]), binned on this
+/// thread: the bins stay in this frame (returning them was a copy of up to
+/// 3.4 KB per node).
+fn serial_sweep<const B: usize>(items: &[PrimRef], cb: &Aabb, ce: Vec3) -> (f32, usize, usize) {
+    let mut b = Bins::<B>::new();
+    b.add(items, &BinMap::new(cb));
+    sweep(&b, items.len(), ce)
+}
+
+/// Bins of a very large range, binned in parallel.
+fn large_bins(items: &[PrimRef], cb: &Aabb) -> Bins<BINS> {
+    let map = BinMap::new(cb);
+    items
+        .par_chunks(16 * 1024)
+        .fold(Bins::new, |mut b, c| {
+            b.add(c, &map);
+            b
+        })
+        .reduce(Bins::new, Bins::merge)
+}
+
+/// The cheapest plane: `(cost, axis, first bin on the right)`; the cost is
+/// the children's `area × blocks` (infinite when no plane separates items).
+fn sweep<const B: usize>(bins: &Bins<B>, n: usize, ce: Vec3) -> (f32, usize, usize) {
+    let mut best = (f32::INFINITY, 0, 0);
+    for a in 0..3 {
+        if ce[a] <= 0.0 {
+            continue;
+        }
+        // Right-to-left: cost of the right side of each plane.
+        let mut right = [0f32; B];
+        let (mut lo, mut hi, mut c) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0usize);
+        for k in (1..B).rev() {
+            lo = lo.min(bins.lo[a][k]);
+            hi = hi.max(bins.hi[a][k]);
+            c += bins.count[a][k] as usize;
+            right[k] = if c == 0 {
+                f32::INFINITY
+            } else {
+                area(lo, hi) * blocks(c)
+            };
+        }
+        let (mut lo, mut hi, mut c) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0usize);
+        #[allow(clippy::needless_range_loop)] // k indexes bins and `right` alike
+        for k in 1..B {
+            lo = lo.min(bins.lo[a][k - 1]);
+            hi = hi.max(bins.hi[a][k - 1]);
+            c += bins.count[a][k - 1] as usize;
+            if c == 0 || c == n {
+                continue;
+            }
+            let cost = area(lo, hi) * blocks(c) + right[k];
+            if cost < best.0 {
+                best = (cost, a, k);
+            }
+        }
+    }
+    best
+}
+
+fn area(lo: Vec3A, hi: Vec3A) -> f32 {
+    let e = (hi - lo).max(Vec3A::ZERO);
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+}
+
+struct Builder {
+    pad: Vec3,
+}
+
+impl Builder {
+    /// How to divide `r`, or `None` for a leaf.
+    /// `items` are the range's references; `depth` is the node level the
+    /// range's node would sit at.
+    fn plan(&self, items: &[PrimRef], r: &Range, depth: usize) -> Option<Plan> {
+        let n = r.len();
+        if n <= 4 {
+            return None;
+        }
+        let ce = r.cbounds.extent();
+        let axis = if ce.x >= ce.y && ce.x >= ce.z {
+            0
+        } else if ce.y >= ce.z {
+            1
+        } else {
+            2
+        };
+        if ce[axis] <= 0.0 {
+            // Coincident centroids: no plane separates them.
+            return (n > MAX_LEAF_ITEMS).then_some(Plan::Median { axis });
+        }
+        // Median splits at least quarter a range per level (two halvings of
+        // the up to seven a node takes), so at most about log4(n) more
+        // levels finish it: switch to them while that still
+        // fits under MAX_DEPTH (only degenerate inputs ever get here).
+        let levels_left = (usize::BITS - n.leading_zeros()) as usize / 2 + 2;
+        if depth + levels_left >= MAX_DEPTH {
+            return Some(Plan::Median { axis });
+        }
+        let best = if n < SMALL_RANGE {
+            serial_sweep::<SMALL_BINS>(items, &r.cbounds, ce)
+        } else if n < PARALLEL_BINNING {
+            serial_sweep::<BINS>(items, &r.cbounds, ce)
+        } else {
+            sweep(&large_bins(items, &r.cbounds), n, ce)
+        };
+        let whole = r.bounds.surface_area();
+        let split = SPLIT_COST * whole + best.0;
+        if n <= MAX_LEAF_ITEMS && whole * blocks(n) <= split {
+            return None;
+        }
+        if !best.0.is_finite() {
+            return Some(Plan::Median { axis });
+        }
+        Some(Plan::Bin {
+            axis: best.1,
+            pos: best.2,
+            bins: if n < SMALL_RANGE { SMALL_BINS } else { BINS },
+        })
+    }
+
+    /// Divides `r` (its items are `refs`, which starts at `r.begin`) by
+    /// `plan` into two non-empty ranges with their bounds.
+    fn divide(&self, refs: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
+        let (mid, (lb, lc), (rb, rc)) = match plan {
+            Plan::Bin { axis, pos, bins } => {
+                let map = BinMap::new(&r.cbounds);
+                let (min, scale) = (map.min[axis], map.scale[axis] * bins as f32);
+                // The same arithmetic as `BinMap::bins`, on one axis, without
+                // the conversion: for `k ≥ 0` and `pos ≤ bins − 1`,
+                // `trunc(min(k, bins − 1)) < pos` exactly when `k < pos`.
+                // All three axes at once, the plan's picked from the mask.
+                let (min, scale) = (Vec3A::splat(min), Vec3A::splat(scale));
+                let pos = Vec3A::splat(pos as f32);
+                partition(refs, |c| {
+                    // NaN gives 0, as in `BinMap::bins`.
+                    ((c - min) * scale).max(Vec3A::ZERO).cmplt(pos).bitmask() >> axis & 1 != 0
+                })
+            }
+            Plan::Median { axis } => {
+                let mid = refs.len() / 2;
+                refs.select_nth_unstable_by(mid, |a, b| {
+                    a.centroid()[axis].total_cmp(&b.centroid()[axis])
+                });
+                let (l, rt) = refs.split_at(mid);
+                (mid, bounds_of(l), bounds_of(rt))
+            }
+        };
+        debug_assert!(mid > 0 && mid < refs.len());
+        let m = r.begin + mid;
+        (
+            Range {
+                begin: r.begin,
+                end: m,
+                bounds: lb,
+                cbounds: lc,
+            },
+            Range {
+                begin: m,
+                end: r.end,
+                bounds: rb,
+                cbounds: rc,
+            },
+        )
+    }
+
+    fn set_child(&self, node: &mut Node, i: usize, c: u32, r: &Range) {
+        node.set(i, c, r.bounds.min - self.pad, r.bounds.max + self.pad);
+    }
+
+    /// Builds the subtree over `r` (whose items are exactly `refs`) and
+    /// appends its nodes to `out`, parent first. Returns its reference: a
+    /// leaf (its first item: `fill_leaves` finds where it ends and rewrites
+    /// it to blocks) or the index of its root in `out`.
+    fn subtree(
+        &self,
+        refs: &mut [PrimRef],
+        r: Range,
+        plan: Option<Plan>,
+        depth: usize,
+        out: &mut Vec<Node>,
+    ) -> u32 {
+        let Some(plan) = plan else {
+            return leaf(r.begin, 1);
+        };
+        // Up to W children: split the largest child that wants splitting.
+        // (On the stack: a vector here was an allocation per node.)
+        let mut all = [(r, None); W];
+        let (a, b) = self.divide(refs_of(refs, &r, &r), &r, plan);
+        let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
+        let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
+        (all[0], all[1]) = ((a, pa), (b, pb));
+        let mut len = 2;
+        while len < W {
+            let pick = all[..len]
+                .iter()
+                .enumerate()
+                .filter(|(_, k)| k.1.is_some())
+                .max_by(|x, y| {
+                    x.1 .0
+                        .bounds
+                        .surface_area()
+                        .total_cmp(&y.1 .0.bounds.surface_area())
+                })
+                .map(|(i, _)| i);
+            let Some(i) = pick else { break };
+            let (k, p) = all[i];
+            let (a, b) = self.divide(refs_of(refs, &r, &k), &k, p.expect("filtered"));
+            let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
+            let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
+            // `a` and `b` take `k`'s place, in order.
+            all.copy_within(i + 1..len, i + 2);
+            (all[i], all[i + 1]) = ((a, pa), (b, pb));
+            len += 1;
+        }
+        let kids = &all[..len];
+        let at = out.len();
+        out.push(Node::EMPTY);
+        let mut node = Node::EMPTY;
+        // (On one thread the parallel path would only add copies.)
+        if r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1 {
+            // Children in parallel, each into its own array, then appended
+            // with their node indices shifted.
+            let mut slices = Vec::with_capacity(W);
+            let mut rest = &mut *refs;
+            let mut base = r.begin;
+            for (k, p) in kids {
+                let (mine, tail) = rest.split_at_mut(k.end - base);
+                slices.push((&mut mine[k.begin - base..], *k, *p));
+                rest = tail;
+                base = k.end;
+            }
+            let subs: Vec<(u32, Vec<Node>)> = slices
+                .into_par_iter()
+                .map(|(s, k, p)| {
+                    let mut v = Vec::with_capacity(s.len() / 8 + 1);
+                    let c = self.subtree(s, k, p, depth + 1, &mut v);
+                    (c, v)
+                })
+                .collect();
+            for (i, ((c, v), (k, _))) in subs.into_iter().zip(kids).enumerate() {
+                let shift = out.len() as u32;
+                let c = if is_leaf(c) { c } else { c + shift };
+                out.extend(v.into_iter().map(|mut n| {
+                    for ch in &mut n.child {
+                        if !is_leaf(*ch) {
+                            *ch += shift;
+                        }
+                    }
+                    n
+                }));
+                self.set_child(&mut node, i, c, k);
+            }
+        } else {
+            for (i, (k, p)) in kids.iter().enumerate() {
+                let sub = refs_of(refs, &r, k);
+                let c = self.subtree(sub, *k, *p, depth + 1, out);
+                self.set_child(&mut node, i, c, k);
+            }
+        }
+        out[at] = node;
+        at as u32
+    }
+}
+
+/// The items of `k` within `refs`, which holds the items of `r`.
+fn refs_of<'a>(refs: &'a mut [PrimRef], r: &Range, k: &Range) -> &'a mut [PrimRef] {
+    &mut refs[k.begin - r.begin..k.end - r.begin]
+}
+
+/// Turns the leaves' item ranges into ranges of [`Tri4`] blocks and fills
+/// the blocks (leaves in item order, so each leaf's blocks are contiguous).
+fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<Tri4> {
+    // The leaves tile the items in order; until here a leaf's reference
+    // holds only its first item. Mark those, then each leaf runs to the
+    // next one's first item.
+    let mut leaf_len = vec![0u8; refs.len()];
+    for n in nodes.iter() {
+        for &c in &n.child {
+            if is_leaf(c) && c != EMPTY {
+                leaf_len[leaf_range(c).0] = 1;
+            }
+        }
+    }
+    let mut end = refs.len();
+    for s in (0..refs.len()).rev() {
+        if leaf_len[s] != 0 {
+            debug_assert!(end - s <= MAX_LEAF_ITEMS);
+            leaf_len[s] = (end - s) as u8;
+            end = s;
+        }
+    }
+    debug_assert_eq!(end, 0, "the first item starts a leaf");
+    // Leaves in item order with their first block, and every block's
+    // items.
+    let mut first_block = vec![0u32; refs.len()];
+    let mut block_items: Vec<(u32, u8)> = Vec::with_capacity(refs.len() / 3);
+    for (s, &k) in leaf_len.iter().enumerate() {
+        if k > 0 {
+            first_block[s] = block_items.len() as u32;
+            for b in (0..k).step_by(4) {
+                block_items.push((s as u32 + b as u32, (k - b).min(4)));
+            }
+        }
+    }
+    nodes.par_iter_mut().for_each(|n| {
+        for c in &mut n.child {
+            if is_leaf(*c) && *c != EMPTY {
+                let s = leaf_range(*c).0;
+                *c = leaf(first_block[s] as usize, (leaf_len[s] as usize).div_ceil(4));
+            }
+        }
+    });
+    let mut tris = Vec::with_capacity(block_items.len());
+    huge_pages(&tris);
+    let items = |(s, k): (u32, u8)| &refs[s as usize..s as usize + k as usize];
+    tris.par_extend(
+        block_items
+            .par_iter()
+            .enumerate()
+            .with_min_len(1024)
+            .map(|(b, &at)| {
+                // The vertices are a gather from the source: ask for those
+                // of a block further on (misses overlap instead of queueing).
+                if let Some(&ahead) = block_items.get(b + PREFETCH_BLOCKS) {
+                    for r in items(ahead) {
+                        src.prefetch(r.id());
+                    }
+                }
+                block(items(at), src)
+            }),
+    );
+    tris
+}
+
+/// How many blocks ahead `fill_leaves` asks for vertices.
+const PREFETCH_BLOCKS: usize = 8;
+
+/// One block of up to four items.
+fn block<S: Source>(items: &[PrimRef], src: &S) -> Tri4 {
+    let mut b = Tri4::EMPTY;
+    for (lane, r) in items.iter().enumerate() {
+        let id = r.id();
+        if r.other() {
+            b.ids[lane] = id | OTHER;
+            continue;
+        }
+        b.ids[lane] = id;
+        for (k, p) in src.vertices(id).iter().enumerate() {
+            for a in 0..3 {
+                b.v[k][a][lane] = p[a];
+            }
+        }
+    }
+    b
+}
+
+#[cfg(test)]
+#[path = "build_tests.rs"]
+mod tests;

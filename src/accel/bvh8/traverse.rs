@@ -1,0 +1,710 @@
+//! Closest-hit and any-hit traversal: per-ray constants computed once, eight
+//! boxes per node step, nearest child first, blocks of four triangles per leaf.
+
+use super::lanes::{Lanes, W};
+use super::node::{is_leaf, leaf_range, prefetch, Node, Tri4, EMPTY, NO_ITEM, OTHER};
+use crate::math::{Ray, Vec3};
+use crate::shape::{intersect_triangle, RaySpace4, WatertightRay, WatertightRay4};
+use crate::stats::TraversalStats;
+use glam::Vec4;
+
+/// Entries of the traversal stack for any tree: at most `W − 1` pending per
+/// inner level and `build::MAX_DEPTH` levels (exact: see the test
+/// `a_worst_case_tree_fills_the_deep_stack`).
+pub(crate) const DEEP: usize = (W - 1) * super::build::MAX_DEPTH;
+/// Entries of the stack for trees at most [`SHALLOW_DEPTH`] deep, the usual
+/// case (the deep stack's zeroing, 1 KB per ray, was 6% of a render's
+/// time).
+pub(crate) const SHALLOW: usize = 64;
+/// The deepest tree the [`SHALLOW`] stack serves.
+pub(crate) const SHALLOW_DEPTH: usize = (SHALLOW - 1) / (W - 1);
+
+/// How items that are not triangles are tested (the world's spheres and
+/// transformed shapes); a mesh has none.
+pub trait Fallback {
+    /// The hit parameter of item `id` in `(tmin, tmax)`.
+    fn intersect(&self, id: u32, ray: &Ray, tmin: f32, tmax: f32) -> Option<f32>;
+}
+
+/// No items but triangles.
+pub struct TrianglesOnly;
+
+impl Fallback for TrianglesOnly {
+    #[inline]
+    fn intersect(&self, _: u32, _: &Ray, _: f32, _: f32) -> Option<f32> {
+        None
+    }
+}
+
+/// Everything a ray needs at every node, computed once per ray (what it
+/// needs at leaves is a [`LeafRay`]).
+pub(crate) struct RayData {
+    pub ray: Ray,
+    /// `origin · inv` per axis, splatted: a slab distance is then one fused
+    /// multiply-subtract, `plane · inv − origin · inv`.
+    oi: [Lanes; 3],
+    /// `1 / dir` per axis, splatted, with tiny components clamped (see
+    /// [`safe_inverse`]).
+    inv: [Lanes; 3],
+    /// Index into `Node::planes` of the near and far plane per axis (the
+    /// ray's octant).
+    near: [usize; 3],
+    far: [usize; 3],
+    /// Bit `a` set where the ray runs towards −axis `a` (see [`octant`](Self::octant)).
+    octant: usize,
+    /// Whether every `origin · inv` is finite: then no slab distance is
+    /// NaN (see [`reduce_as_ints`](Self::reduce_as_ints)).
+    finite: bool,
+}
+
+/// The octant parameter of [`closest`] and [`any`] that reads the ray's
+/// planes from [`RayData`] at run time (`0..8` fixes them at compile time).
+pub(crate) const ANY_OCTANT: usize = 8;
+
+/// What a ray needs at leaves: the watertight test's permutation and shear,
+/// and the same splatted for the four-lane pre-test. Made at the first leaf
+/// a ray reaches: many rays (shadow rays from the floor, camera rays past
+/// the mesh) never reach one.
+pub(crate) struct LeafRay {
+    wt: WatertightRay,
+    w4: WatertightRay4,
+}
+
+/// `1 / d` per axis, with every component of magnitude below `1e-18` taken
+/// as `±1e-18` (its sign kept), as Embree's `rcp_safe` does: a zero
+/// component's `±inf` would make `plane · inv − origin · inv` an `inf − inf`
+/// NaN, which keeps the box (conservative, but a ray parallel to an axis,
+/// as every ray of an orthographic camera is, would then cull nothing on
+/// that axis).
+///
+/// Still conservative: a clamped ray's slab for that axis is the one of a
+/// ray drifting at most `2e-18 · t` from the true one, so a box it rejects
+/// holds no point of the true ray closer than `t = margin / 2e-18`, with
+/// `margin` (`overlap::margin`, `1e-5` of the scene's magnitude) the padding
+/// every box has: `5·10¹²` scene sizes for a unit direction.
+///
+/// A NaN component also becomes `±1e-18` (`max` returns its second
+/// operand when the first is NaN): the box test then culls as for that
+/// finite direction, and the triangle test, which sees the NaN, hits
+/// nothing, as brute force does.
+///
+/// Branch-free, and the clamp before the division: its result starts every
+/// ray's first box test, and a clamp of the quotient (or one relative to
+/// the largest component) measured 5% slower on the benchmark's rays.
+#[inline(always)]
+fn safe_inverse(d: Vec3) -> Vec3 {
+    let d = glam::Vec3A::from(d);
+    let tiny = glam::Vec3A::splat(1e-18);
+    Vec3::from(glam::Vec3A::ONE / d.abs().max(tiny).copysign(d))
+}
+
+impl RayData {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        let inv = safe_inverse(ray.dir);
+        let oi = ray.origin * inv;
+        // The sign bit of `1 / d`: set for `d < 0`, for `d = −0` (`−∞`) and
+        // for `d = −∞` (`−0`), as `inv < 0 || (inv == 0 && d < 0)` was; a NaN
+        // direction makes every slab NaN, whichever plane is near.
+        let neg = |a: usize| usize::from(inv[a].is_sign_negative());
+        RayData {
+            ray: *ray,
+            oi: [Lanes::splat(oi.x), Lanes::splat(oi.y), Lanes::splat(oi.z)],
+            inv: [
+                Lanes::splat(inv.x),
+                Lanes::splat(inv.y),
+                Lanes::splat(inv.z),
+            ],
+            near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
+            far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
+            octant: neg(0) | neg(1) << 1 | neg(2) << 2,
+            finite: oi.is_finite(),
+        }
+    }
+
+    /// Whether [`boxes`](Self::boxes) may reduce a query's slab distances
+    /// with integer operations: `tmin` is `+0` or more (not NaN, not `−0`)
+    /// and no slab distance can be NaN. A slab distance `plane · inv −
+    /// origin · inv` is NaN only if `origin · inv` is not finite: `inv` is
+    /// finite and non-zero for a finite direction (clamped, see
+    /// [`safe_inverse`], which also turns a NaN component finite), planes
+    /// are finite or `±inf` (an empty slot), and a finite `origin · inv`
+    /// subtracted from a finite or infinite product is never NaN. Such rays
+    /// (an origin beyond about `1e20` or NaN) and negative `tmin` take the
+    /// float reduction.
+    #[inline(always)]
+    pub fn reduce_as_ints(&self, tmin: f32) -> bool {
+        self.finite && tmin >= 0.0 && tmin.is_sign_positive()
+    }
+
+    /// The ray's octant, `0..8`: the `O` for which [`closest`] and [`any`]
+    /// know its near and far planes at compile time.
+    #[inline(always)]
+    pub fn octant(&self) -> usize {
+        self.octant
+    }
+
+    /// Indices into `Node::planes` of the near and far plane per axis: from
+    /// `O` when it is an octant (constant offsets: the node step then loads
+    /// each plane straight from the node, with no index to reload), else
+    /// from the ray.
+    #[inline(always)]
+    fn planes<const O: usize>(&self) -> ([usize; 3], [usize; 3]) {
+        if O < ANY_OCTANT {
+            debug_assert_eq!(O, self.octant);
+            let s = |a: usize| (O >> a) & 1;
+            (
+                [3 * s(0), 1 + 3 * s(1), 2 + 3 * s(2)],
+                [3 - 3 * s(0), 4 - 3 * s(1), 5 - 3 * s(2)],
+            )
+        } else {
+            (self.near, self.far)
+        }
+    }
+
+    /// The slab test against a node's eight boxes: a bit mask of the boxes
+    /// the ray meets within `[tmin, tmax]`, and their entry distances.
+    ///
+    /// Each slab distance is one fused multiply-subtract, `plane · inv −
+    /// origin · inv` (Embree's form): one rounding of the exact product
+    /// minus the rounded `origin · inv`, an error of a few ulps of the
+    /// larger of `plane` and `origin` along the axis, as `(plane − origin) ·
+    /// inv` had; the boxes' padding (`overlap::margin`, about 80 ulps of the
+    /// scene's magnitude) absorbs it.
+    ///
+    /// The four distances per side are reduced as a tree, `max(max(x, y),
+    /// max(z, tmin))`, not a chain: one dependent operation fewer in the
+    /// walk's critical path from a node's load to its children's mask.
+    ///
+    /// With `I` ([`reduce_as_ints`](Self::reduce_as_ints)), the
+    /// reduction and the final `tn <= tf` compare the f32 bit patterns as
+    /// `i32` (Embree's AVX-512 traversal does the same): one-cycle integer
+    /// operations in place of four-cycle float ones on that critical path.
+    /// Exact, because `tmin ≥ +0` sits in the `max` and no operand is NaN:
+    /// the integer order is the float order among values with the sign bit
+    /// clear, and every negative value (`−0` too) is below `+0`, so `tn` is
+    /// the float maximum (a negative slab never wins against `tmin`); and
+    /// where some far distance is negative, `tf` comes out negative (not
+    /// necessarily the most negative), below `tn`: the box is rejected as
+    /// the float test rejects it. The one difference is a far distance of
+    /// exactly `−0`, which the float test keeps and this one rejects: the
+    /// ray leaves that box at `t = 0`, where a hit (`t > tmin ≥ 0`) cannot
+    /// be; the boxes' padding dwarfs the rounding of a distance that near.
+    ///
+    /// Without `I`, a NaN slab distance (an `inf − inf`) never rejects a
+    /// box: `Lanes::max`/`min` return their second operand when either is
+    /// NaN, a NaN slab is always a first operand, and a NaN result of the
+    /// inner pair is again a first operand (`tmin` and `tmax` are never
+    /// NaN), so such a slab is ignored.
+    #[inline(always)]
+    fn boxes<B: BoxTest, const O: usize, const I: bool>(
+        &self,
+        bt: B,
+        n: &Node,
+        tmin: Lanes,
+        tmax: Lanes,
+    ) -> (u32, Lanes) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = bt.avx() {
+            return self.boxes_avx::<O, I>(avx, n, tmin, tmax);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = bt;
+        let p = &n.planes;
+        let (near, far) = self.planes::<O>();
+        let tnx = p[near[0]].mul_sub(self.inv[0], self.oi[0]);
+        let tny = p[near[1]].mul_sub(self.inv[1], self.oi[1]);
+        let tnz = p[near[2]].mul_sub(self.inv[2], self.oi[2]);
+        let tfx = p[far[0]].mul_sub(self.inv[0], self.oi[0]);
+        let tfy = p[far[1]].mul_sub(self.inv[1], self.oi[1]);
+        let tfz = p[far[2]].mul_sub(self.inv[2], self.oi[2]);
+        if I {
+            let tn = tnx.max_bits(tny).max_bits(tnz.max_bits(tmin));
+            let tf = tfx.min_bits(tfy).min_bits(tfz.min_bits(tmax));
+            return (tn.le_mask_bits(tf), tn);
+        }
+        let tn = tnx.max(tny).max(tnz.max(tmin));
+        let tf = tfx.min(tfy).min(tfz.min(tmax));
+        (tn.le_mask(tf), tn)
+    }
+
+    /// [`boxes`](Self::boxes) with 256-bit AVX operations: the same
+    /// operations on the same operands in the same order (`vfmsub`, fused
+    /// as `f32::mul_add` is; `vmaxps`/`vminps` in the same tree, whose NaN
+    /// rule is `maxps`'s, and an ordered `<=` compare; or `vpmaxsd`/
+    /// `vpminsd` and `vpcmpgtd`, the `i32` order of the portable
+    /// `*_bits`), so the mask and the distances are bit-identical to the
+    /// portable test.
+    ///
+    /// Deliberately no `#[target_feature]`: a function with one cannot be
+    /// `#[inline(always)]`, and LLVM kept it out of line (a call per node).
+    /// Without it, this body is inlined into `dispatch`'s AVX2 copy, and the
+    /// `_mm256_*` intrinsics then inline into that AVX2 function.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn boxes_avx<const O: usize, const I: bool>(
+        &self,
+        _: Avx,
+        n: &Node,
+        tmin: Lanes,
+        tmax: Lanes,
+    ) -> (u32, Lanes) {
+        use std::arch::x86_64::*;
+        // SAFETY: an `Avx` value exists only where AVX2 (hence AVX) and FMA
+        // were detected at run time (`Avx::new` is `unsafe` with that
+        // contract, and its callers check `is_x86_feature_detected!` first),
+        // so the AVX and FMA intrinsics run on a CPU that has them. `Lanes` is `repr(C)` of two
+        // `Vec4`s: eight contiguous f32s (32 bytes), so the unaligned loads
+        // read exactly one `Lanes` each, in bounds, and the transmute back
+        // is between two 32-byte plain-float types.
+        unsafe {
+            let ld = |l: &Lanes| _mm256_loadu_ps(l as *const Lanes as *const f32);
+            // The ray's splats are re-broadcast from their low four lanes,
+            // not loaded whole: `RayData::new` writes each `Lanes` as two
+            // 16-byte halves, and a 32-byte load of two separate stores
+            // cannot be forwarded from them (it waits for both to reach the
+            // cache, at every query). Same values, so the same results.
+            let bc =
+                |l: &Lanes| _mm256_broadcastss_ps(_mm_loadu_ps(l as *const Lanes as *const f32));
+            let p = &n.planes;
+            let (o, i) = (&self.oi, &self.inv);
+            let t = |k: usize, a: usize| _mm256_fmsub_ps(ld(&p[k]), bc(&i[a]), bc(&o[a]));
+            let (near, far) = self.planes::<O>();
+            let tnx = t(near[0], 0);
+            let tny = t(near[1], 1);
+            let tnz = t(near[2], 2);
+            let tfx = t(far[0], 0);
+            let tfy = t(far[1], 1);
+            let tfz = t(far[2], 2);
+            if I {
+                let i = |v: __m256| _mm256_castps_si256(v);
+                let max = |a: __m256i, b: __m256i| _mm256_max_epi32(a, b);
+                let min = |a: __m256i, b: __m256i| _mm256_min_epi32(a, b);
+                let tn = max(max(i(tnx), i(tny)), max(i(tnz), i(ld(&tmin))));
+                let tf = min(min(i(tfx), i(tfy)), min(i(tfz), i(ld(&tmax))));
+                // `tn <= tf` is `!(tn > tf)`: AVX2 has only the latter.
+                let out = _mm256_castsi256_ps(_mm256_cmpgt_epi32(tn, tf));
+                let mask = !(_mm256_movemask_ps(out) as u32) & 0xff;
+                return (mask, std::mem::transmute::<__m256i, Lanes>(tn));
+            }
+            let tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, ld(&tmin)));
+            let tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, ld(&tmax)));
+            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(tn, tf)) as u32;
+            (mask, std::mem::transmute::<__m256, Lanes>(tn))
+        }
+    }
+}
+
+impl LeafRay {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let wt = WatertightRay::new(ray);
+        LeafRay {
+            wt,
+            w4: WatertightRay4::new(&wt),
+        }
+    }
+
+    /// The watertight test (`shape::triangle::intersect_triangle`) on the
+    /// four lanes of a block: the mask of lanes hit in `(tmin, tmax)`, their
+    /// parameters and barycentrics (`bary[k][lane]`). A 4-lane f32 pre-test
+    /// (`RaySpace4::may_hit`) drops the lanes it proves missed; if any
+    /// remain, the AVX copy runs the exact test on all four lanes at once
+    /// (`shape::hit4_avx`), the portable one calls the very function brute
+    /// force calls once per remaining lane: results are bit-identical either
+    /// way. Unused and non-triangle lanes (NaN vertices) are skipped by
+    /// their ids.
+    ///
+    /// Lanes holding item `skip` are not tested ([`NO_ITEM`] skips none:
+    /// unused lanes are never tested anyway).
+    ///
+    /// The barycentrics of each lane hit come along too: the closest hit
+    /// hands them to `Triangle::surface_at`, so the world need not re-run
+    /// the test for them (the any-hit walk ignores them; they are dead code
+    /// there once inlined).
+    #[inline(always)]
+    fn triangles<B: BoxTest>(
+        &self,
+        bt: B,
+        b: &Tri4,
+        tmin: f32,
+        tmax: f32,
+        skip: u32,
+    ) -> (u32, [f32; 4], [[f32; 4]; 3]) {
+        let rs = RaySpace4::new(&self.w4, &b.v);
+        let mut todo = rs.may_hit() & triangle_lanes(b) & !lanes_of(b, skip);
+        // Arrays, not a `Vec4`: a `Vec4` indexed by a run-time lane compiles
+        // to a jump table.
+        let mut t = [0.0; 4];
+        let mut bary = [[0.0; 4]; 3];
+        if todo == 0 {
+            return (0, t, bary);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if bt.avx().is_some() {
+            // SAFETY: an `Avx` token exists only where AVX2 (hence AVX) was
+            // detected at run time (see `Avx::new`).
+            let h = unsafe { crate::shape::hit4_avx(&self.w4, &rs, tmin, tmax) };
+            return (h.mask & todo, h.t, h.b);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = bt;
+        let mut mask = 0;
+        while todo != 0 {
+            let lane = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            let p = |k: usize| Vec3::new(b.v[k][0][lane], b.v[k][1][lane], b.v[k][2][lane]);
+            if let Some(h) = intersect_triangle(&self.wt, p(0), p(1), p(2), tmin, tmax) {
+                mask |= 1 << lane;
+                t[lane] = h.t;
+                for (k, w) in h.b.into_iter().enumerate() {
+                    bary[k][lane] = w;
+                }
+            }
+        }
+        (mask, t, bary)
+    }
+}
+
+/// Which box test the traversal uses: [`Portable`] (glam `Vec4` pairs) or,
+/// on x86-64, [`Avx`] (one 256-bit operation per step). A value, so that
+/// the AVX test needs a token only a run-time check can make.
+pub(crate) trait BoxTest: Copy {
+    /// The proof that AVX is available, for the AVX test.
+    #[cfg(target_arch = "x86_64")]
+    fn avx(self) -> Option<Avx>;
+}
+
+/// The portable box test.
+#[derive(Clone, Copy)]
+pub(crate) struct Portable;
+
+impl BoxTest for Portable {
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx(self) -> Option<Avx> {
+        None
+    }
+}
+
+/// The AVX box test, and the proof that the CPU has AVX2 (so AVX) and FMA:
+/// made only by the `unsafe` [`Avx::new`].
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(crate) struct Avx(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx {
+    /// # Safety
+    /// The CPU must support AVX2 and FMA (`is_x86_feature_detected!` of
+    /// `"avx2"` and `"fma"`).
+    #[inline(always)]
+    pub(crate) unsafe fn new() -> Avx {
+        Avx(())
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl BoxTest for Avx {
+    #[inline(always)]
+    fn avx(self) -> Option<Avx> {
+        Some(self)
+    }
+}
+
+/// The lanes of a block that hold triangles (not [`OTHER`] items, not unused:
+/// [`NO_ITEM`] has the flag too).
+#[inline(always)]
+fn triangle_lanes(b: &Tri4) -> u32 {
+    // Both flags are the id's top bit: the lanes whose id, read as an f32,
+    // has its sign bit clear (one `movmskps`; no arithmetic on the bits).
+    const _: () = assert!(OTHER == 1 << 31 && NO_ITEM & OTHER != 0);
+    !Vec4::from_array(b.ids.map(f32::from_bits)).is_negative_bitmask() & 0xf
+}
+
+/// The lanes of a block whose id is `id`.
+#[inline(always)]
+fn lanes_of(b: &Tri4, id: u32) -> u32 {
+    glam::UVec4::from_array(b.ids)
+        .cmpeq(glam::UVec4::splat(id))
+        .bitmask()
+}
+
+/// Starts loading child `c` (a node or its leaf's first block): a node
+/// with several children hit prefetches each as it pushes or sorts it, so
+/// that the nearest one's load and the others' overlap (one pass over the
+/// mask: a separate prefetch pass cost the any-hit walk 7% more
+/// instructions).
+#[inline(always)]
+fn prefetch_child(nodes: &[Node], tris: &[Tri4], c: u32) {
+    if !is_leaf(c) {
+        if let Some(n) = nodes.get(c as usize) {
+            prefetch(n);
+        }
+    } else if let Some(b) = tris.get(leaf_range(c).0) {
+        prefetch(b);
+    }
+}
+
+/// Pushes the children in `mask` (at least two) far to near and returns the
+/// nearest, so that the nearest is visited first and the others are popped
+/// in order of distance; starts loading each ([`prefetch_child`]).
+#[inline(always)]
+fn order(
+    nodes: &[Node],
+    tris: &[Tri4],
+    node: &Node,
+    mut mask: u32,
+    dist: Lanes,
+    stack: &mut [(u32, f32)],
+    sp: &mut usize,
+) -> u32 {
+    // An array, not `Lanes` indexing: a `Vec4` indexed by a run-time lane
+    // compiles to a jump table.
+    let dist = dist.to_array();
+    let second = mask & (mask - 1);
+    if second & (second - 1) == 0 {
+        // Exactly two, the usual case: one compare. The same order as the
+        // sort below (on a tie the higher slot is visited first), so the
+        // walk is the same.
+        let (i, j) = (
+            mask.trailing_zeros() as usize,
+            second.trailing_zeros() as usize,
+        );
+        let (a, b) = ((node.child[i], dist[i]), (node.child[j], dist[j]));
+        prefetch_child(nodes, tris, a.0);
+        prefetch_child(nodes, tris, b.0);
+        let (near, far) = if a.1 < b.1 { (a, b) } else { (b, a) };
+        stack[*sp] = far;
+        *sp += 1;
+        return near.0;
+    }
+    let mut kids = [(0u32, 0f32); W];
+    let mut k = 0;
+    while mask != 0 {
+        let i = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        // Insertion sort, far first.
+        let e = (node.child[i], dist[i]);
+        prefetch_child(nodes, tris, e.0);
+        let mut j = k;
+        while j > 0 && kids[j - 1].1 < e.1 {
+            kids[j] = kids[j - 1];
+            j -= 1;
+        }
+        kids[j] = e;
+        k += 1;
+    }
+    for &e in &kids[..k - 1] {
+        stack[*sp] = e;
+        *sp += 1;
+    }
+    kids[k - 1].0
+}
+
+/// The closest hit of a traversal: its parameter, its item id, and, for a
+/// triangle, the watertight test's barycentrics (`None` for an item the
+/// fallback tested).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Closest {
+    pub t: f32,
+    pub id: u32,
+    pub bary: Option<[f32; 3]>,
+}
+
+/// The closest hit ([`Closest`]), with an `N`-entry stack ([`SHALLOW`]
+/// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
+/// AVX2 copy compiles it with AVX2.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn closest<
+    S: TraversalStats,
+    F: Fallback + ?Sized,
+    B: BoxTest,
+    const N: usize,
+    const O: usize,
+    const I: bool,
+>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rd: &RayData,
+    tmin: f32,
+    tmax: f32,
+    stats: &mut S,
+) -> Option<Closest> {
+    if nodes.is_empty() {
+        return None;
+    }
+    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let mut best: Option<Closest> = None;
+    let mut tmax = tmax;
+    let tmin4 = Lanes::splat(tmin);
+    debug_assert!(!I || rd.reduce_as_ints(tmin));
+    let mut stack = [(0u32, 0f32); N];
+    let mut sp = 0usize;
+    // Made at the first leaf (see `LeafRay`).
+    let mut leaf_ray = None;
+    let mut cur = 0u32;
+    loop {
+        if !is_leaf(cur) {
+            let node = &nodes[cur as usize];
+            if S::ENABLED {
+                n_nodes += 1;
+            }
+            let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(tmax));
+            if mask != 0 {
+                cur = if mask & (mask - 1) == 0 {
+                    node.child[mask.trailing_zeros() as usize]
+                } else {
+                    order(nodes, tris, node, mask, dist, &mut stack, &mut sp)
+                };
+                continue;
+            }
+        } else if cur != EMPTY {
+            let (start, count) = leaf_range(cur);
+            let lr = &*leaf_ray.get_or_insert_with(|| LeafRay::new(&rd.ray));
+            for b in &tris[start..start + count] {
+                if S::ENABLED {
+                    n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
+                }
+                let (mut mask, t, bary) = lr.triangles(bt, b, tmin, tmax, NO_ITEM);
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if t[i] < tmax {
+                        tmax = t[i];
+                        best = Some(Closest {
+                            t: t[i],
+                            id: b.ids[i],
+                            bary: Some([bary[0][i], bary[1][i], bary[2][i]]),
+                        });
+                    }
+                }
+                if b.has_other() {
+                    for &id in &b.ids {
+                        if id != NO_ITEM && id & OTHER != 0 {
+                            let id = id & !OTHER;
+                            if let Some(t) = fallback.intersect(id, &rd.ray, tmin, tmax) {
+                                tmax = t;
+                                best = Some(Closest { t, id, bary: None });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Pop the nearest pending child that can still hold a closer hit.
+        loop {
+            if sp == 0 {
+                stats.add(n_nodes, n_tests);
+                return best;
+            }
+            sp -= 1;
+            let (r, d) = stack[sp];
+            if d <= tmax {
+                cur = r;
+                break;
+            }
+        }
+    }
+}
+
+/// Whether anything but triangle `skip` lies on the ray in `(tmin, tmax)`:
+/// stops at the first hit. `skip` is a triangle the caller knows cannot
+/// block the ray (the one it leaves; [`NO_ITEM`] for none): its lanes are
+/// not tested. Always inlined (see [`closest`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn any<
+    S: TraversalStats,
+    F: Fallback + ?Sized,
+    B: BoxTest,
+    const N: usize,
+    const O: usize,
+    const I: bool,
+>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rd: &RayData,
+    tmin: f32,
+    tmax: f32,
+    skip: u32,
+    stats: &mut S,
+) -> bool {
+    if nodes.is_empty() {
+        return false;
+    }
+    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let (tmin4, tmax4) = (Lanes::splat(tmin), Lanes::splat(tmax));
+    debug_assert!(!I || rd.reduce_as_ints(tmin));
+    let mut stack = [0u32; N];
+    let mut sp = 0usize;
+    // Made at the first leaf (see `LeafRay`).
+    let mut leaf_ray = None;
+    let mut cur = 0u32;
+    let hit = 'walk: loop {
+        if !is_leaf(cur) {
+            let node = &nodes[cur as usize];
+            if S::ENABLED {
+                n_nodes += 1;
+            }
+            // No ordering: any occluder ends the walk, and sorting costs
+            // more than it saves for shadow rays.
+            let (mut mask, _) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
+            if mask != 0 {
+                cur = node.child[mask.trailing_zeros() as usize];
+                mask &= mask - 1;
+                if mask != 0 {
+                    // Several children: start loading them all, pushing
+                    // the others in the same pass.
+                    prefetch_child(nodes, tris, cur);
+                    while mask != 0 {
+                        let c = node.child[mask.trailing_zeros() as usize];
+                        prefetch_child(nodes, tris, c);
+                        stack[sp] = c;
+                        sp += 1;
+                        mask &= mask - 1;
+                    }
+                }
+                continue;
+            }
+        } else if cur != EMPTY {
+            let (start, count) = leaf_range(cur);
+            let lr = &*leaf_ray.get_or_insert_with(|| LeafRay::new(&rd.ray));
+            for b in &tris[start..start + count] {
+                if S::ENABLED {
+                    n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
+                }
+                if lr.triangles(bt, b, tmin, tmax, skip).0 != 0 {
+                    break 'walk true;
+                }
+                if b.has_other()
+                    && b.ids.iter().any(|&id| {
+                        id != NO_ITEM
+                            && id & OTHER != 0
+                            && fallback
+                                .intersect(id & !OTHER, &rd.ray, tmin, tmax)
+                                .is_some()
+                    })
+                {
+                    break 'walk true;
+                }
+            }
+        }
+        if sp == 0 {
+            break false;
+        }
+        sp -= 1;
+        cur = stack[sp];
+    };
+    stats.add(n_nodes, n_tests);
+    hit
+}
+
+#[cfg(test)]
+#[path = "traverse_tests.rs"]
+mod tests;

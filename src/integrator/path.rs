@@ -1,0 +1,587 @@
+//! Unidirectional path tracing (Kajiya 1986) with next-event estimation and
+//! multiple importance sampling (Veach 1997, the power heuristic) between
+//! light sampling and BSDF sampling.
+//!
+//! At every vertex the path takes one light sample (a light chosen
+//! uniformly, a point or direction of it) and one BSDF sample (which lobe,
+//! which direction); the BSDF sample continues the path. Light found by
+//! either strategy is weighted by the power heuristic of the two densities,
+//! so each path of light is counted once:
+//! - delta lights (point, directional) only through light sampling (a ray
+//!   never hits them), weight 1;
+//! - delta lobes (mirror, clear glass) only through BSDF sampling (light
+//!   sampling cannot find their direction), weight 1;
+//! - emitters that cannot be sampled (emission on a plane, a transformed or
+//!   moving shape) and the background's uniform environment only through
+//!   BSDF sampling, weight 1; the scene's `AreaLight`s are not surfaces a
+//!   ray can hit, so they are found only by light sampling, weight 1.
+//!
+//! Emitters that can be sampled are the triangles (single or of meshes) and
+//! spheres whose material has an `emittedColor`: a triangle by area, a
+//! sphere by the cone of directions it fills as seen from the point.
+//!
+//! **Sample dimensions.** Every vertex takes the same [`DIMS_PER_VERTEX`]
+//! dimensions of the pixel's [`SampleStream`] in the same order, used or
+//! not (light choice, light point, lobe, direction, roulette), so dimension
+//! `k` of a pixel's samples means the same decision in every path and the
+//! sampler's stratification reaches every bounce. The image depends on
+//! nothing but the streams: it is the same for any thread count, tile order
+//! or piece split.
+//!
+//! **Depth.** `max_bounces` counts scattering events: 0 shows the emitters
+//! seen directly, 1 adds direct lighting, each further one a bounce of
+//! indirect light (Mitsuba's `max_depth` is one more). Russian roulette
+//! from `rr_depth` on ends a path with probability `1 − min(1, max β)`
+//! (β: the path's throughput), at most 0.95, and divides the survivors by
+//! the survival probability: unbiased.
+
+use super::{count_ray, Integrator, RayKind, RayObserver};
+use crate::bsdf::Bsdf;
+use crate::light::{incident, sample_light};
+use crate::material::{eval, TextureSpace};
+
+use crate::math::warp::uniform_triangle;
+use crate::math::{Ray, Spawn, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
+use crate::sampler::SampleStream;
+use crate::scene::{Light, Material, Phong};
+use crate::shape::Shape;
+use crate::stats::Counters;
+use crate::world::{Hit, World};
+use std::f32::consts::TAU;
+
+/// Stream dimensions every path vertex takes: light choice (1-D), light
+/// point (2-D), lobe (1-D), direction (2-D), roulette (1-D).
+pub const DIMS_PER_VERTEX: u32 = 5;
+
+/// Which strategies find the light: both weighted by MIS (the default), or
+/// one alone (for comparisons; each alone converges to the same image
+/// wherever it can find the light at all).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Strategy {
+    /// Light and BSDF sampling, weighted by the power heuristic.
+    #[default]
+    Mis,
+    /// Light sampling only (emitters hit by a BSDF ray after a non-delta
+    /// bounce count nothing, unless light sampling cannot find them).
+    Light,
+    /// BSDF sampling only (no shadow rays: delta lights are never found).
+    Bsdf,
+}
+
+/// The path tracer's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathSettings {
+    /// Most scattering events on a path (see the module documentation).
+    pub max_bounces: u32,
+    /// Bounces before Russian roulette may end a path.
+    pub rr_depth: u32,
+    /// Which strategies are used.
+    pub strategy: Strategy,
+    /// Where textures are looked up.
+    pub texture_space: TextureSpace,
+}
+
+impl Default for PathSettings {
+    /// 64 bounces, roulette from the fourth, MIS, world-space textures.
+    fn default() -> Self {
+        Self {
+            max_bounces: 64,
+            rr_depth: 3,
+            strategy: Strategy::Mis,
+            texture_space: TextureSpace::World,
+        }
+    }
+}
+
+/// An emitting primitive that light sampling can choose.
+#[derive(Clone, Copy, Debug)]
+enum Emitter {
+    /// A triangle: its primitive and area.
+    Triangle { prim: u32, area: f32 },
+    /// A sphere's primitive.
+    Sphere { prim: u32 },
+}
+
+/// The path tracer for one world: its settings and the emitters found in
+/// the world's primitives.
+#[derive(Clone, Debug)]
+pub struct PathTracer {
+    /// Settings.
+    pub settings: PathSettings,
+    emitters: Vec<Emitter>,
+    /// For each primitive, its index in `emitters` (`u32::MAX`: none).
+    emitter_of_prim: Vec<u32>,
+    /// `emitters.len() + world.lights().len()`.
+    light_count: usize,
+}
+
+/// A light sample: direction, radiance arriving divided by nothing, the
+/// density per unit solid angle of the direction (0 for delta lights and
+/// the scene's `AreaLight`s, whose `radiance` is already divided by it),
+/// and where the shadow ray goes.
+struct LightSample {
+    wi: Vec3,
+    radiance: Vec3,
+    pdf: f32,
+    target: Target,
+}
+
+#[derive(Clone, Copy)]
+enum Target {
+    Point(Vec3),
+    Direction(Vec3),
+    Surface(SurfacePoint),
+}
+
+/// The largest emission a material can have anywhere (a texture blends
+/// its two entries).
+fn max_emission(materials: &[Material], index: usize, depth: u32) -> Vec3 {
+    match materials.get(index) {
+        Some(Material::Phong(p)) => p.emission,
+        Some(Material::Texture { a, b, .. }) if depth < 64 => {
+            max_emission(materials, *a, depth + 1).max(max_emission(materials, *b, depth + 1))
+        }
+        _ => Vec3::ZERO,
+    }
+}
+
+/// The power heuristic (β = 2) weight of a strategy of density `a` against
+/// one of density `b`.
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+impl PathTracer {
+    /// The path tracer for `world`: finds its emitting triangles and spheres.
+    pub fn new(world: &World, settings: PathSettings) -> Self {
+        let mut emitters = Vec::new();
+        let mut emitter_of_prim = vec![u32::MAX; world.prims().len()];
+        for (i, p) in world.prims().iter().enumerate() {
+            if max_emission(world.materials(), p.material as usize, 0).max_element() <= 0.0 {
+                continue;
+            }
+            let e = match &p.shape {
+                Shape::Triangle(t) if !t.is_degenerate() => {
+                    let [a, b, c] = t.v;
+                    let area = 0.5 * (b - a).cross(c - a).length();
+                    (area > 0.0).then_some(Emitter::Triangle {
+                        prim: i as u32,
+                        area,
+                    })
+                }
+                Shape::Sphere(_) => Some(Emitter::Sphere { prim: i as u32 }),
+                _ => None,
+            };
+            if let Some(e) = e {
+                emitter_of_prim[i] = emitters.len() as u32;
+                emitters.push(e);
+            }
+        }
+        let light_count = emitters.len() + world.lights().len();
+        Self {
+            settings,
+            emitters,
+            emitter_of_prim,
+            light_count,
+        }
+    }
+
+    /// How many lights light sampling chooses from (emitting primitives
+    /// and the scene's lights).
+    pub fn light_count(&self) -> usize {
+        self.light_count
+    }
+
+    /// The material at a point of primitive `material`/`instance`.
+    fn material(&self, world: &World, material: u32, instance: u32, p: Vec3) -> Phong {
+        match self.settings.texture_space {
+            TextureSpace::World => eval(world.materials(), material, p),
+            TextureSpace::Object => eval(
+                world.object_materials(),
+                material,
+                world.object_from_world()[instance as usize].transform_point3(p),
+            ),
+        }
+    }
+
+    /// Radiance an emitting surface sends from `hit` back along `ray`
+    /// (front side only).
+    fn emitted(&self, m: &Phong, hit: &Hit, ray: &Ray) -> Vec3 {
+        if m.emission != Vec3::ZERO && hit.normal.dot(ray.dir) < 0.0 {
+            m.emission
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// The density per unit solid angle with which light sampling from `p`
+    /// would have chosen the point `hit` of an emitter (including the
+    /// choice of the light); 0 if it could not.
+    fn pdf_light(&self, world: &World, p: Vec3, hit: &Hit) -> f32 {
+        let Some(&k) = self.emitter_of_prim.get(hit.prim as usize) else {
+            return 0.0;
+        };
+        let Some(e) = self.emitters.get(k as usize) else {
+            return 0.0;
+        };
+        let choose = 1.0 / self.light_count as f32;
+        match *e {
+            Emitter::Triangle { area, .. } => {
+                let d = hit.point - p;
+                let cos = hit.normal.dot(d).abs() / d.length();
+                if cos <= 0.0 {
+                    0.0
+                } else {
+                    choose * d.length_squared() / (cos * area)
+                }
+            }
+            Emitter::Sphere { prim } => match &world.prims()[prim as usize].shape {
+                Shape::Sphere(s) => choose * cone_pdf(p, s.center, s.radius),
+                _ => 0.0,
+            },
+        }
+    }
+
+    /// One light sample from the point `from` (light chosen by `uc`, point
+    /// by `u`): `None` when the light sends nothing there.
+    fn sample_light(
+        &self,
+        world: &World,
+        from: Vec3,
+        uc: f32,
+        u: Vec2,
+    ) -> Option<(LightSample, f32)> {
+        let n = self.light_count;
+        if n == 0 {
+            return None;
+        }
+        let k = ((uc * n as f32) as usize).min(n - 1);
+        let choose = 1.0 / n as f32;
+        if let Some(e) = self.emitters.get(k) {
+            let (prim, y) = match *e {
+                Emitter::Triangle { prim, .. } => {
+                    let Shape::Triangle(t) = &world.prims()[prim as usize].shape else {
+                        return None;
+                    };
+                    (prim, t.surface_at(uniform_triangle(u)))
+                }
+                Emitter::Sphere { prim } => {
+                    let Shape::Sphere(s) = &world.prims()[prim as usize].shape else {
+                        return None;
+                    };
+                    (prim, sample_sphere_cone(from, s.center, s.radius, u)?)
+                }
+            };
+            let d = y.p - from;
+            let dist2 = d.length_squared();
+            if dist2 <= 0.0 || !dist2.is_finite() {
+                return None;
+            }
+            let wi = d / dist2.sqrt();
+            // Front side only: the emitter's normal must face the point.
+            if y.n.dot(wi) >= 0.0 {
+                return None;
+            }
+            let p = &world.prims()[prim as usize];
+            let m = self.material(world, p.material, p.instance, y.p);
+            if m.emission == Vec3::ZERO {
+                return None;
+            }
+            let hit = Hit {
+                t: 0.0,
+                point: y.p,
+                error: y.error,
+                normal: y.n,
+                shading_normal: y.n,
+                prim,
+                material: p.material,
+                instance: p.instance,
+            };
+            let pdf = self.pdf_light(world, from, &hit);
+            if !(pdf > 0.0 && pdf.is_finite()) {
+                return None;
+            }
+            return Some((
+                LightSample {
+                    wi,
+                    radiance: m.emission,
+                    pdf,
+                    target: Target::Surface(y),
+                },
+                choose,
+            ));
+        }
+        let light = &world.lights()[k - self.emitters.len()];
+        let (inc, target) = match light {
+            Light::Area { .. } => {
+                let inc = sample_light(light, from, u);
+                (inc, Target::Surface(inc.at?))
+            }
+            Light::Point { position, .. } => (incident(light, from), Target::Point(*position)),
+            Light::Directional { .. } => {
+                let inc = incident(light, from);
+                (inc, Target::Direction(inc.to_light))
+            }
+        };
+        if inc.to_light == Vec3::ZERO || inc.color == Vec3::ZERO {
+            return None;
+        }
+        Some((
+            LightSample {
+                wi: inc.to_light,
+                radiance: inc.color,
+                pdf: 0.0,
+                target,
+            },
+            choose,
+        ))
+    }
+}
+
+/// Whether the shadow ray from `from` to a light sample's target is
+/// blocked (counted and shown to the observer as a shadow ray).
+fn occluded(
+    world: &World,
+    from: &mut Spawn,
+    target: Target,
+    time: f32,
+    depth: u32,
+    c: &mut Counters,
+    obs: &mut impl RayObserver,
+) -> bool {
+    let (ray, tmax) = match target {
+        Target::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),
+        Target::Direction(d) => (from.spawn_ray(d), f32::INFINITY),
+        Target::Surface(s) => (from.spawn_ray_to_surface(&s), 1.0 - SHADOW_EPSILON),
+    };
+    let ray = ray.at_time(time);
+    count_ray(c, RayKind::Shadow);
+    let blocked = world.occluded_leaving(&ray, 0.0, tmax, from.leaving, c);
+    obs.shadow(&ray, tmax, blocked, depth);
+    blocked
+}
+
+/// The density per unit solid angle of [`sample_sphere_cone`] from `p`
+/// (0 from inside the sphere, which emits outwards only).
+fn cone_pdf(p: Vec3, center: Vec3, radius: f32) -> f32 {
+    let d2 = (center - p).length_squared();
+    let r2 = radius * radius;
+    if d2 <= r2 {
+        return 0.0;
+    }
+    let sin2 = r2 / d2;
+    let cos_max = (1.0 - sin2).max(0.0).sqrt();
+    // 1 − cos θmax without cancellation for small spheres.
+    let one_minus = sin2 / (1.0 + cos_max);
+    1.0 / (TAU * one_minus)
+}
+
+/// A point of the sphere seen from `p`: a direction uniform in the cone
+/// the sphere fills (density [`cone_pdf`]), and where it meets the sphere.
+fn sample_sphere_cone(p: Vec3, center: Vec3, radius: f32, u: Vec2) -> Option<SurfacePoint> {
+    let dc = center - p;
+    let d2 = dc.length_squared();
+    let r2 = radius * radius;
+    if d2 <= r2 {
+        return None;
+    }
+    let dist = d2.sqrt();
+    let wc = dc / dist;
+    let sin2 = r2 / d2;
+    let cos_max = (1.0 - sin2).max(0.0).sqrt();
+    let one_minus = sin2 / (1.0 + cos_max);
+    let cos_t = 1.0 - u.x * one_minus;
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = TAU * u.y;
+    let (x, y) = wc.any_orthonormal_pair();
+    let w = x * (sin_t * phi.cos()) + y * (sin_t * phi.sin()) + wc * cos_t;
+    // The nearer root of |p + t·w − c|² = r²; at the cone's rim rounding
+    // may leave no root: take the tangent point.
+    let b = w.dot(dc);
+    let disc = (r2 - (dc - b * w).length_squared()).max(0.0);
+    let t = b - disc.sqrt();
+    let q = p + w * t;
+    let n = (q - center).normalize_or_zero();
+    let q = center + n * radius;
+    let error = crate::math::gamma(5) * (center.abs() + (n * radius).abs());
+    (n != Vec3::ZERO).then_some(SurfacePoint { p: q, error, n })
+}
+
+impl Integrator for PathTracer {
+    fn li(
+        &self,
+        world: &World,
+        camera_ray: &Ray,
+        tmin: f32,
+        stream: &mut SampleStream,
+        counters: &mut Counters,
+        observer: &mut impl RayObserver,
+    ) -> (Vec3, Option<Hit>) {
+        let s = &self.settings;
+        let background = world.background().color;
+        let mut radiance = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        let mut ray = *camera_ray;
+        let mut ray_tmin = tmin;
+        let mut kind = RayKind::Primary;
+        let mut first_hit = None;
+        // The previous vertex: where the ray left, the BSDF density of its
+        // direction, and whether it came from a delta lobe.
+        let mut prev: Option<(Vec3, f32, bool)> = None;
+        let mut depth = 0u32;
+        loop {
+            count_ray(counters, kind);
+            let hit = world.intersect(&ray, ray_tmin, f32::INFINITY, counters);
+            observer.ray(
+                kind,
+                &ray,
+                hit.map_or(f32::INFINITY, |h| h.t),
+                depth,
+                beta.max_element(),
+                hit.map(|h| h.normal),
+            );
+            let Some(h) = hit else {
+                // The uniform environment: found only by BSDF sampling.
+                radiance += beta * background;
+                break;
+            };
+            if depth == 0 {
+                first_hit = Some(h);
+            }
+            let m = self.material(world, h.material, h.instance, h.point);
+            let le = self.emitted(&m, &h, &ray);
+            if le != Vec3::ZERO {
+                let w = match prev {
+                    None | Some((_, _, true)) => 1.0,
+                    Some((p, pdf_bsdf, false)) => {
+                        let pdf_light = self.pdf_light(world, p, &h);
+                        match s.strategy {
+                            _ if pdf_light <= 0.0 => 1.0,
+                            Strategy::Mis => power_heuristic(pdf_bsdf, pdf_light),
+                            Strategy::Light => 0.0,
+                            Strategy::Bsdf => 1.0,
+                        }
+                    }
+                };
+                radiance += beta * le * w;
+            }
+            if depth >= s.max_bounces {
+                break;
+            }
+            // This vertex's dimensions, taken whether used or not.
+            let u_light_choice = stream.next_1d();
+            let u_light = stream.next_2d();
+            let u_lobe = stream.next_1d();
+            let u_dir = stream.next_2d();
+            let u_rr = stream.next_1d();
+
+            let bsdf = Bsdf::from_phong(&m, h.normal);
+            let wo = -ray.dir.normalize();
+            let mut spawn = Spawn::leaving(h.surface_point(), h.prim);
+            if s.strategy != Strategy::Bsdf && !bsdf.is_delta() {
+                if let Some((ls, choose)) =
+                    self.sample_light(world, h.point, u_light_choice, u_light)
+                {
+                    let f = bsdf.f(wo, ls.wi);
+                    let cos = ls.wi.dot(h.normal).abs();
+                    if f != Vec3::ZERO
+                        && cos > 0.0
+                        && !occluded(
+                            world,
+                            &mut spawn,
+                            ls.target,
+                            ray.time,
+                            depth + 1,
+                            counters,
+                            observer,
+                        )
+                    {
+                        let contribution = if ls.pdf > 0.0 {
+                            let w = match s.strategy {
+                                Strategy::Mis => power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)),
+                                _ => 1.0,
+                            };
+                            f * cos * ls.radiance * (w / ls.pdf)
+                        } else {
+                            // Delta lights and AreaLights: `radiance` is
+                            // already divided by the density of the point.
+                            f * cos * ls.radiance / choose
+                        };
+                        radiance += beta * contribution;
+                    }
+                }
+            }
+            let Some(bs) = bsdf.sample_f(wo, u_lobe, u_dir) else {
+                break;
+            };
+            let weight = bs.weight(h.normal);
+            if !(weight.is_finite() && weight.max_element() > 0.0) {
+                break;
+            }
+            beta *= weight;
+            depth += 1;
+            if depth > s.rr_depth {
+                let survive = beta.max_element().min(0.95);
+                if u_rr >= survive {
+                    break;
+                }
+                beta /= survive;
+            }
+            kind = if bs.wi.dot(h.normal) * wo.dot(h.normal) < 0.0 {
+                RayKind::Transmitted
+            } else {
+                RayKind::Reflected
+            };
+            prev = Some((h.point, bs.pdf, bs.delta));
+            ray = spawn.spawn_ray(bs.wi).at_time(camera_ray.time);
+            ray_tmin = 0.0;
+        }
+        (radiance, first_hit)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_heuristic_weights_sum_to_one() {
+        for (a, b) in [(1.0, 1.0), (0.3, 7.0), (5.0, 0.0), (0.0, 2.0)] {
+            let s = power_heuristic(a, b) + power_heuristic(b, a);
+            assert!((s - 1.0).abs() < 1e-6, "{a} {b}");
+        }
+        assert_eq!(power_heuristic(f32::INFINITY, 1.0), 1.0);
+        assert_eq!(power_heuristic(0.0, 0.0), 0.0);
+    }
+
+    /// The cone's directions: the density integrates to 1 over the cone
+    /// (uniform in solid angle, so it is 1/solid angle), and every sampled
+    /// point lies on the sphere's near side.
+    #[test]
+    fn sphere_cone_samples_the_visible_cap() {
+        let (c, r) = (Vec3::new(0.0, 0.0, -4.0), 1.0);
+        let p = Vec3::ZERO;
+        let pdf = cone_pdf(p, c, r);
+        let cos_max = (1.0f32 - 1.0 / 16.0).sqrt();
+        assert!((pdf - 1.0 / (TAU * (1.0 - cos_max))).abs() / pdf < 1e-4);
+        let k = 32;
+        for i in 0..k {
+            for j in 0..k {
+                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                let y = sample_sphere_cone(p, c, r, u).unwrap();
+                assert!(((y.p - c).length() - r).abs() < 1e-5);
+                // Visible from p: the normal faces p.
+                assert!(y.n.dot(p - y.p) >= -1e-4, "{y:?}");
+            }
+        }
+        assert_eq!(cone_pdf(c, c, r), 0.0);
+    }
+}
