@@ -4,11 +4,13 @@
 //! (ambient occlusion, path tracing) plug in without touching the loop.
 
 pub mod ao;
+mod kind;
 mod observer;
 pub mod optics;
 mod whitted;
 
 pub use ao::{AmbientOcclusion, AoSettings};
+pub use kind::IntegratorKind;
 pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
 pub use whitted::Whitted;
 
