@@ -2,8 +2,13 @@
 //! render, per sampler and sample count, and for adaptive subdivision, on two
 //! scenes; writes `docs/images/aa/results.csv` and example images.
 //!
-//! `cargo run --release --example antialiasing_study [SCENES_DIR]`
-//! then `python3 scripts/plot_antialiasing.py` draws the plot.
+//! Needs the course data (scene7_01 and scene7_02):
+//! `GLINT_SHARED=/path/to/shared cargo run --release --example antialiasing_study [SCENES_DIR] [OUT_DIR]`
+//! (SCENES_DIR defaults to `$GLINT_SHARED/scenes/6837`, else
+//! `../shared/scenes/6837`; without it the example exits 2 saying so).
+//! It writes into OUT_DIR, `target/antialiasing_study` unless given;
+//! `docs/images/aa` refreshes the document's images. Then
+//! `python3 scripts/plot_antialiasing.py` draws the plot.
 
 use glint::format::load_scene;
 use glint::integrator::Whitted;
@@ -47,8 +52,22 @@ fn main() {
     let scenes = std::env::args()
         .nth(1)
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("../shared/scenes/6837"));
-    let out = Path::new("docs/images/aa");
+        .unwrap_or_else(|| {
+            std::env::var_os("GLINT_SHARED")
+                .map_or_else(|| PathBuf::from("../shared"), PathBuf::from)
+                .join("scenes/6837")
+        });
+    if !scenes.join("scene7_01_sphere_triangle.txt").is_file() {
+        eprintln!(
+            "antialiasing_study: needs the course data: no scene7_01_sphere_triangle.txt in {} (set GLINT_SHARED or pass the scenes folder)",
+            scenes.display()
+        );
+        std::process::exit(2);
+    }
+    let out_dir = std::env::args()
+        .nth(2)
+        .map_or_else(|| PathBuf::from("target/antialiasing_study"), PathBuf::from);
+    let out = out_dir.as_path();
     std::fs::create_dir_all(out).unwrap();
     let integrator = Whitted {
         bounces: 5,

@@ -15,7 +15,7 @@
 # and runs the fast tests below under nextest, which stops at the first
 # failure (`.config/nextest.toml`, profile `mutants`). Results go to
 # `mutants/<name>/mutants.out/` (caught.txt, missed.txt, timeout.txt,
-# unviable.txt); docs/testing.md records the counts and each missed mutant.
+# unviable.txt), which git ignores; docs/testing.md records the counts.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

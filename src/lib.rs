@@ -3,6 +3,7 @@ pub mod accel;
 pub mod animation;
 #[cfg(feature = "cli")]
 pub mod app;
+pub mod bsdf;
 pub mod format;
 pub mod integrator;
 pub mod job;

@@ -59,3 +59,21 @@ pub fn scenes(test: &str) -> Option<PathBuf> {
 pub fn references(test: &str) -> Option<PathBuf> {
     shared("reference/6837", test)
 }
+
+/// Whether the CPU has AVX2 and FMA, the features of the AVX copies of the
+/// hot loops. When it does not, the test named `test` is reported as
+/// skipped on stderr (like a test missing the course data) and `false` is
+/// returned, so a CPU without them does not pass the agreement tests
+/// silently.
+#[cfg(target_arch = "x86_64")]
+pub fn avx2_fma(test: &str) -> bool {
+    let ok =
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma");
+    if !ok {
+        let _ = writeln!(
+            std::io::stderr(),
+            "skipped {test}: the CPU lacks AVX2 or FMA, so there is no AVX path to compare"
+        );
+    }
+    ok
+}

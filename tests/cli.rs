@@ -89,7 +89,6 @@ fn unknown_flag_is_named_and_preview_flags_are_ignored() {
             "20",
             "-output",
             "a.png",
-            "-gui",
             "-tessellation",
             "10",
             "5",
@@ -100,7 +99,7 @@ fn unknown_flag_is_named_and_preview_flags_are_ignored() {
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.lines().count(), 1, "one line on stderr: {err}");
-    assert!(err.contains("-gui") && err.contains("-gouraud"));
+    assert!(err.contains("-tessellation") && err.contains("-gouraud"));
     assert!(dir.join("a.png").exists());
 }
 
@@ -328,7 +327,6 @@ fn zero_and_huge_sizes_are_refused_up_front() {
     );
     assert!(!dir.join("z.png").exists());
 
-    let start = std::time::Instant::now();
     let out = raytracer(
         &[
             "-input", &scene, "-size", "100000", "100000", "-output", "h.png",
@@ -344,8 +342,25 @@ fn zero_and_huge_sizes_are_refused_up_front() {
     assert!(err.contains("choose a smaller size"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(!dir.join("h.png").exists());
-    // Refused before loading or allocating anything.
-    assert!(start.elapsed().as_secs() < 5);
+    // Refused before loading anything: with a scene that does not exist, the
+    // size is still what is refused. (How long a refusal takes is measured
+    // by `scripts/bench-refusals.sh`, not asserted here.)
+    let out = raytracer(
+        &[
+            "-input",
+            "missing.txt",
+            "-size",
+            "100000",
+            "100000",
+            "-output",
+            "h.png",
+        ],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("596.0 GiB of memory"), "{err}");
+    assert!(!err.contains("missing.txt"), "{err}");
 }
 
 #[test]
@@ -370,5 +385,36 @@ fn hdr_outputs_by_extension() {
     assert!(
         exr.starts_with(&[0x76, 0x2f, 0x31, 0x01]),
         "EXR magic number"
+    );
+}
+
+/// `raytracer -stats` prints the scene's bounds in the file's own
+/// coordinates (world space), not in the camera-centred space glint renders
+/// in: a sphere of radius 1 at (10, 20, 30) seen from (10, 20, 40).
+#[test]
+fn raytracer_stats_prints_world_bounds() {
+    let dir = scratch("stats-bounds");
+    std::fs::write(
+        dir.join("s.txt"),
+        "PerspectiveCamera { center 10 20 40 direction 0 0 -1 up 0 1 0 angle 30 }
+         Group { numObjects 1 Sphere { center 10 20 30 radius 1 } }",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args([
+            "-input", "s.txt", "-size", "8", "8", "-output", "s.png", "-stats",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.contains("scene bounds"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        line.ends_with("(9.0000, 19.0000, 29.0000) -> (11.0000, 21.0000, 31.0000)"),
+        "{line}"
     );
 }

@@ -654,16 +654,32 @@ fn slope(ns: &[u32], errs: &[f64]) -> f64 {
 }
 
 /// RMSE against a 4096-sample Sobol reference at N = 4, 16, 64 camera
-/// samples for the random and the Sobol sampler; checks the slopes.
+/// samples for the random and the Sobol sampler; checks the slopes. (The
+/// reference is glint's own: a biased estimator converges to its own bias.
+/// The closed-form tests above, and `convergence_to` with a closed form,
+/// catch bias.)
 fn convergence(name: &str, sc: &Scene, integrator: &impl Integrator, size: u32) {
     let reference = render_with(sc, integrator, size, SamplerKind::Sobol, 4096, 1234);
+    convergence_to(name, sc, integrator, size, &reference);
+}
+
+/// RMSE against `truth` at N = 4, 16, 64 camera samples for the random and
+/// the Sobol sampler; checks the slopes (an estimator converging to
+/// anything but `truth` stalls at its bias and fails them).
+fn convergence_to(
+    name: &str,
+    sc: &Scene,
+    integrator: &impl Integrator,
+    size: u32,
+    reference: &[Vec3],
+) {
     let ns = [4u32, 16, 64];
     let mut report = format!("{name}:");
     let mut at_64 = Vec::new();
     for kind in [SamplerKind::Random, SamplerKind::Sobol] {
         let errs: Vec<f64> = ns
             .iter()
-            .map(|&n| rmse(&render_with(sc, integrator, size, kind, n, 7), &reference))
+            .map(|&n| rmse(&render_with(sc, integrator, size, kind, n, 7), reference))
             .collect();
         let s = slope(&ns, &errs);
         report += &format!(
@@ -769,6 +785,84 @@ fn noise_falls_with_samples_ambient_occlusion() {
         },
     };
     convergence("ambient occlusion", &sc, &ao, 24);
+}
+
+/// Ambient occlusion between a floor and a ceiling at height `h` with AO
+/// distance `d > h`: a cosine-weighted ray at angle θ meets the ceiling at
+/// `h / cos θ`, within `d` when `cos θ > h/d`, which has probability
+/// `1 − (h/d)²`; so the open fraction is `(h/d)²` at every floor point. The
+/// renders converge to that closed form (not to their own high-spp render):
+/// AO ignoring its distance (0 everywhere) or any other bias stalls.
+#[test]
+fn ambient_occlusion_converges_to_its_closed_form() {
+    let (h, d) = (1.0f32, 2.0f32);
+    let sc = scene(
+        Camera::Perspective {
+            center: Vec3::new(0.0, 0.9, 0.0),
+            direction: Vec3::NEG_Y,
+            up: Vec3::Z,
+            angle_deg: 60.0,
+        },
+        vec![],
+        vec![white()],
+        Node::Group(vec![
+            shape(plane(Vec3::Y, 0.0), 0),
+            shape(plane(Vec3::Y, h), 0),
+        ]),
+    );
+    let ao = AmbientOcclusion {
+        settings: AoSettings {
+            samples: 1,
+            distance: d,
+        },
+    };
+    let size = 16;
+    let truth = vec![Vec3::splat((h / d) * (h / d)); (size * size) as usize];
+    convergence_to("ambient occlusion, closed form", &sc, &ao, size, &truth);
+    let fine = render_with(&sc, &ao, size, SamplerKind::Sobol, 1024, 3);
+    let mean = fine.iter().map(|c| c.x as f64).sum::<f64>() / fine.len() as f64;
+    assert!((mean - 0.25).abs() < 0.005, "mean open fraction {mean}");
+}
+
+/// Thin lens: the in-focus surface is the plane `z = −focus_distance`, not
+/// the sphere of that radius. A dot on the plane 18.7° off axis (5.6% farther
+/// than the focus distance) stays sharp at a wide aperture; a dot on the
+/// sphere of radius `FOCUS` in the same direction is blurred (thin lens:
+/// a disk of 2.7 px radius, RMS 1.9 px).
+#[test]
+fn thin_lens_focuses_on_a_plane_not_a_sphere() {
+    let w = Whitted::default();
+    let on_plane = Vec3::new(1.2, 1.2, -FOCUS);
+    let on_sphere = on_plane.normalize() * FOCUS;
+    let aperture = 2.0;
+    let img = render_with(
+        &dot_scene(on_plane, 0.01, aperture),
+        &w,
+        W,
+        SamplerKind::Sobol,
+        256,
+        0,
+    );
+    let (c, r) = spot(&img);
+    println!("on the focus plane, off axis: centroid {c}, rms radius {r:.3} px");
+    assert!((c - project(on_plane)).length() < 1.0, "{c}");
+    assert!(
+        r < 1.0,
+        "a dot on the focus plane is blurred: rms radius {r}"
+    );
+    let (_, r) = spot(&render_with(
+        &dot_scene(on_sphere, 0.01, aperture),
+        &w,
+        W,
+        SamplerKind::Sobol,
+        256,
+        0,
+    ));
+    println!("on the sphere of the focus distance: rms radius {r:.3} px");
+    assert!(
+        r > 1.5,
+        "a dot off the focus plane is sharp: rms radius {r}"
+    );
 }
 
 /// Splitting: N shadow (AO) rays per camera sample at one camera sample per

@@ -28,7 +28,7 @@ fn pixels() -> (u32, u32, Vec<Vec3>) {
 }
 
 /// Reads a PFM: header, then rows bottom to top; returns rows top first.
-fn read_pfm(path: &Path) -> (u32, u32, Vec<Vec3>) {
+pub(crate) fn read_pfm(path: &Path) -> (u32, u32, Vec<Vec3>) {
     let bytes = std::fs::read(path).unwrap();
     // Three header lines, each ended by one newline.
     let mut ends = bytes.iter().enumerate().filter(|(_, b)| **b == b'\n');

@@ -275,6 +275,16 @@ fn slurm_script_and_kubernetes_job_render_mergeable_pieces() {
             .unwrap();
         ok(&out);
     }
+    // Without glint on the PATH a task says how to get it there, exit 2.
+    let bare = Command::new("bash")
+        .arg(root.join("deploy/slurm/render.sbatch"))
+        .env("PATH", "/usr/bin:/bin")
+        .env("SLURM_ARRAY_TASK_ID", "0")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(bare.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bare.stderr).contains("cargo install --path ."));
     let merge = Command::new("bash")
         .arg(root.join("deploy/slurm/merge.sbatch"))
         .env("PATH", &path)
@@ -284,8 +294,11 @@ fn slurm_script_and_kubernetes_job_render_mergeable_pieces() {
         .unwrap();
     ok(&merge);
 
-    // Kubernetes: completions = N in the command; run the container's shell
-    // command for every index.
+    // Kubernetes: the image laid out as deploy/Dockerfile builds it, the
+    // volume an empty folder at its mount path, every pod of the render Job
+    // and then the merge Job run exactly as the manifests say, chrooted
+    // into the image (scripts/container_sim.py); only SIZE and SPP, the
+    // manifest's own variables, are set smaller.
     let yaml = std::fs::read_to_string(root.join("deploy/k8s/render-job.yaml")).unwrap();
     let completions: u32 = yaml
         .lines()
@@ -295,43 +308,28 @@ fn slurm_script_and_kubernetes_job_render_mergeable_pieces() {
         .parse()
         .unwrap();
     assert!(yaml.contains("completionMode: Indexed"));
-    let command = yaml
-        .lines()
-        .skip_while(|l| !l.trim().starts_with("args:"))
-        .nth(1)
-        .unwrap()
-        .trim()
-        .trim_start_matches("- ")
-        .replace("/work/", "");
     assert!(
-        command.contains(&format!(
+        yaml.contains(&format!(
             "--tile-from-env JOB_COMPLETION_INDEX/{completions}"
         )),
-        "{command}"
+        "the command's N differs from completions"
     );
-    std::fs::create_dir_all(dir.join("pieces-k8s")).unwrap();
-    let command = command.replace("pieces/", "pieces-k8s/");
-    for i in 0..completions {
-        let out = Command::new("sh")
-            .args(["-c", &command])
-            .env("PATH", &path)
-            .env("JOB_COMPLETION_INDEX", i.to_string())
-            .env("SIZE", "48 36")
-            .env("SPP", "2")
-            .current_dir(&dir)
+    let k8s = if python_has_yaml() {
+        std::fs::create_dir_all(dir.join("k8s")).unwrap();
+        let sim = Command::new("python3")
+            .arg(root.join("scripts/container_sim.py"))
+            .arg(bin)
+            .arg(dir.join("k8s"))
+            .args(["--env", "SIZE=48 36", "--env", "SPP=2"])
+            .arg(root.join("deploy/k8s/render-job.yaml"))
+            .arg(root.join("deploy/k8s/merge-job.yaml"))
             .output()
             .unwrap();
-        ok(&out);
-    }
-    let pieces: Vec<String> = (0..completions)
-        .map(|i| format!("pieces-k8s/piece-{i}.exr"))
-        .collect();
-    let args: Vec<&str> = ["merge"]
-        .into_iter()
-        .chain(pieces.iter().map(String::as_str))
-        .chain(["-o", "k8s.exr"])
-        .collect();
-    ok(&glint(&args, &dir));
+        ok(&sim);
+        Some(dir.join("k8s/root/work/frame.exr"))
+    } else {
+        None
+    };
 
     // Both equal the single render with the same flags.
     let single = [
@@ -361,12 +359,134 @@ fn slurm_script_and_kubernetes_job_render_mergeable_pieces() {
         s,
         "Slurm pieces differ"
     );
-    assert_eq!(
-        std::fs::read(dir.join("k8s.exr")).unwrap(),
-        s,
-        "Kubernetes pieces differ"
-    );
+    if let Some(frame) = k8s {
+        assert_eq!(
+            std::fs::read(frame).unwrap(),
+            s,
+            "the Kubernetes Jobs' frame differs"
+        );
+    }
     assert!(std::fs::read_to_string(root.join("deploy/Dockerfile"))
         .unwrap()
         .contains("cargo build --release --bin glint"));
+    // The build context leaves the build folder out.
+    let ignore = std::fs::read_to_string(root.join(".dockerignore")).unwrap();
+    assert!(ignore.lines().any(|l| l.trim() == "target/"));
+}
+
+/// Whether `python3` with PyYAML is here for `scripts/container_sim.py`
+/// (CI installs it and sets `GLINT_REQUIRE_PYYAML=1`, so it cannot skip).
+fn python_has_yaml() -> bool {
+    let has = Command::new("python3")
+        .args(["-c", "import yaml"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has {
+        assert!(
+            std::env::var("GLINT_REQUIRE_PYYAML").as_deref() != Ok("1"),
+            "python3 has no PyYAML, and GLINT_REQUIRE_PYYAML=1"
+        );
+        eprintln!("skipped the Kubernetes simulation: python3 has no PyYAML (set GLINT_REQUIRE_PYYAML=1 to require it)");
+    }
+    has
+}
+
+/// A crop anywhere (one pixel, one tile, across tiles, at every edge and
+/// corner) of an image seven tiles wide and three high renders exactly the
+/// whole render's pixels there and exits 0 without a `.partial` file, with a
+/// filter inside its pixel and with one reaching three pixels out; `--tile`
+/// bands of the same image merge into it bit for bit.
+#[test]
+fn crops_anywhere_on_an_image_many_tiles_wide_are_exact_and_complete() {
+    let dir = scratch("crops");
+    let scene = own_scene("whitted.txt").to_string_lossy().into_owned();
+    let (w, h) = (200usize, 70usize); // 7 x 3 tiles of 32
+    for filter in ["box:0.5", "gaussian:1.5"] {
+        let base = [
+            "render",
+            scene.as_str(),
+            "--size",
+            "200",
+            "70",
+            "--spp",
+            "2",
+            "--sampler",
+            "sobol",
+            "--filter",
+            filter,
+            "--shadows",
+            "--quiet",
+        ];
+        ok(&glint(&[&base[..], &["-o", "full.exr"]].concat(), &dir));
+        let full = glint::output::read_exr_window(&dir.join("full.exr")).unwrap();
+        let crops: [[usize; 4]; 9] = [
+            [100, 35, 101, 36], // one pixel
+            [64, 32, 96, 64],   // exactly one tile
+            [40, 10, 130, 50],  // across tiles
+            [0, 0, 1, 1],       // top-left corner pixel
+            [199, 69, 200, 70], // bottom-right corner pixel
+            [150, 0, 200, 70],  // right edge, full height
+            [0, 60, 200, 70],   // bottom edge, full width
+            [0, 20, 13, 41],    // left edge
+            [31, 31, 33, 33],   // four tiles' corner
+        ];
+        for [x0, y0, x1, y1] in crops {
+            let name = format!("crop-{x0}-{y0}-{x1}-{y1}.exr");
+            let c: Vec<String> = [x0, y0, x1, y1].iter().map(|v| v.to_string()).collect();
+            let out = glint(
+                &[
+                    &base[..],
+                    &["-o", &name, "--crop", &c[0], &c[1], &c[2], &c[3]],
+                ]
+                .concat(),
+                &dir,
+            );
+            assert_eq!(
+                out.status.code(),
+                Some(0),
+                "{filter} crop {c:?}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            assert!(!dir.join(name.replace(".exr", ".partial.exr")).exists());
+            let p = glint::output::read_exr_window(&dir.join(&name)).unwrap();
+            let (cw, ch) = (x1 - x0, y1 - y0);
+            assert_eq!(p.window, (x0 as u32, y0 as u32, cw as u32, ch as u32));
+            for row in 0..ch {
+                for x in 0..cw {
+                    let (a, b) = (p.pixels[row * cw + x], full.pixels[(row + y0) * w + x + x0]);
+                    assert_eq!(
+                        a.to_array().map(f32::to_bits),
+                        b.to_array().map(f32::to_bits),
+                        "{filter} crop {c:?}: pixel ({}, {})",
+                        x + x0,
+                        row + y0
+                    );
+                }
+            }
+        }
+        // --tile bands of the same wide image: each exits 0, and they merge
+        // into the whole render's file.
+        let mut names = Vec::new();
+        for i in 0..5 {
+            let name = format!("band-{i}.exr");
+            let out = glint(
+                &[&base[..], &["-o", &name, "--tile", &format!("{i}/5")]].concat(),
+                &dir,
+            );
+            assert_eq!(out.status.code(), Some(0), "{filter} tile {i}/5");
+            names.push(name);
+        }
+        let args: Vec<&str> = ["merge"]
+            .into_iter()
+            .chain(names.iter().map(String::as_str))
+            .chain(["-o", "bands.exr"])
+            .collect();
+        ok(&glint(&args, &dir));
+        assert_eq!(
+            std::fs::read(dir.join("bands.exr")).unwrap(),
+            std::fs::read(dir.join("full.exr")).unwrap(),
+            "{filter}: bands differ from the whole render"
+        );
+        assert_eq!(h, full.display.1 as usize);
+    }
 }

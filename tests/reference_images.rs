@@ -35,7 +35,7 @@ impl Tolerance {
 }
 
 /// The core images: every line of A1-A4 and A6's untextured lines. Measured
-/// 2026-11-30 (docs/testing.md, "Reference images"): the largest differences
+/// (docs/testing.md, "Reference images"): the largest differences
 /// of any of them outside [`WIDER`] are a mean of 0.59 (output4_06f) and
 /// 0.37% of pixels off (output6_11b); most are below 0.05 and 0.05%. The
 /// margin is 0.4 on the mean and 0.13 points on the fraction.

@@ -219,7 +219,7 @@ fn fmt3(v: [f64; 3]) -> String {
 
 /// Per-pixel tolerance of the quirk-reproduced renders: (command file,
 /// output, pixel step, largest mean abs difference, largest fraction of
-/// pixels off by more than 24), from the differences measured 2026-11-30
+/// pixels off by more than 24), from the differences measured
 /// plus a margin, the core images' tolerance where that covers them:
 /// - checkerboards: mean 0.10-0.39, 0.06-0.42% off (6_13 the most);
 /// - 6_15, 6_16, 6_17a: identical but for 6_17a's mean of 0.004;

@@ -14,6 +14,11 @@
 //! `(tmin, tmax_then)` it finds nothing in the smaller interval now, and if it
 //! found a hit, that hit is already the best or beaten.
 
+use super::PrimHit;
+use crate::math::Ray;
+use crate::primitive::Primitive;
+use crate::stats::Counters;
+
 /// Slots in the cache (a power of two). 64 × 4 bytes is one small memset per
 /// ray; measured on random triangle soups it removes nearly all duplicates.
 const SLOTS: usize = 64;
@@ -42,6 +47,79 @@ impl Mailbox {
         } else {
             *slot = id;
             true
+        }
+    }
+}
+
+/// The primitive tests of one ray walking cells or leaves front to back
+/// (grid, octree, nested grid): each cell's items, skipping those the
+/// mailbox says were tested already, one `intersection_tests` count per
+/// primitive tested.
+pub(crate) struct ItemTests<'a> {
+    prims: &'a [Primitive],
+    ray: &'a Ray,
+    tmin: f32,
+    seen: Mailbox,
+    mailbox: bool,
+}
+
+impl<'a> ItemTests<'a> {
+    /// Tests of `ray` from `tmin` against `prims`, with mailboxing on or off.
+    #[inline]
+    pub(crate) fn new(prims: &'a [Primitive], ray: &'a Ray, tmin: f32, mailbox: bool) -> Self {
+        Self {
+            prims,
+            ray,
+            tmin,
+            seen: Mailbox::new(),
+            mailbox,
+        }
+    }
+
+    /// Whether `id` is to be tested (not skipped by the mailbox).
+    #[inline]
+    fn fresh(&mut self, id: u32) -> bool {
+        !self.mailbox || self.seen.first_visit(id)
+    }
+
+    /// Whether an item of `items` lies on the ray before `tmax` (stops at
+    /// the first).
+    #[inline]
+    pub(crate) fn any(&mut self, items: &[u32], tmax: f32, c: &mut Counters) -> bool {
+        items.iter().any(|&id| {
+            if !self.fresh(id) {
+                return false;
+            }
+            c.intersection_tests += 1;
+            self.prims[id as usize]
+                .shape
+                .intersect(self.ray, self.tmin, tmax)
+                .is_some()
+        })
+    }
+
+    /// Tests `items` against the best hit so far (`best`, at `t_best`, the
+    /// query's `tmax` while there is none), keeping the closer.
+    #[inline]
+    pub(crate) fn closest(
+        &mut self,
+        items: &[u32],
+        best: &mut Option<PrimHit>,
+        t_best: &mut f32,
+        c: &mut Counters,
+    ) {
+        for &id in items {
+            if !self.fresh(id) {
+                continue;
+            }
+            c.intersection_tests += 1;
+            if let Some(t) = self.prims[id as usize]
+                .shape
+                .intersect(self.ray, self.tmin, *t_best)
+            {
+                *t_best = t;
+                *best = Some(PrimHit { t, prim: id });
+            }
         }
     }
 }

@@ -30,7 +30,7 @@
 
 use super::grid::build::{box_entries, fill, fit_entries, resolution_with};
 use super::grid::{CellWalk, Face, Lattice};
-use super::mailbox::Mailbox;
+use super::mailbox::ItemTests;
 use super::overlap::{margin, padded};
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray};
@@ -175,18 +175,9 @@ impl NestedGrid {
     ) -> Option<PrimHit> {
         let mut best: Option<PrimHit> = None;
         let mut t_best = tmax;
-        let mut seen = Mailbox::new();
+        let mut tests = ItemTests::new(prims, ray, tmin, true);
         let test = &mut |items: &[u32], t_exit: f32, c: &mut Counters| {
-            for &id in items {
-                if !seen.first_visit(id) {
-                    continue;
-                }
-                c.intersection_tests += 1;
-                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
-                    t_best = t;
-                    best = Some(PrimHit { t, prim: id });
-                }
-            }
+            tests.closest(items, &mut best, &mut t_best, c);
             // Accepted only now: nothing in a later cell can be closer.
             t_best <= t_exit
         };
@@ -320,19 +311,8 @@ impl Aggregate for NestedGrid {
         tmax: f32,
         c: &mut Counters,
     ) -> bool {
-        let mut seen = Mailbox::new();
-        let visit = &mut |items: &[u32], _, c: &mut Counters| {
-            items.iter().any(|&id| {
-                if !seen.first_visit(id) {
-                    return false;
-                }
-                c.intersection_tests += 1;
-                prims[id as usize]
-                    .shape
-                    .intersect(ray, tmin, tmax)
-                    .is_some()
-            })
-        };
+        let mut tests = ItemTests::new(prims, ray, tmin, true);
+        let visit = &mut |items: &[u32], _, c: &mut Counters| tests.any(items, tmax, c);
         Self::walk(&self.top, ray, tmin, tmax, c, visit, &mut |_| {})
     }
 

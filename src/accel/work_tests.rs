@@ -10,7 +10,8 @@ use super::{Aggregate, Bvh, Grid, NestedGrid, Octree, Split, Storage};
 use crate::stats::Counters;
 
 /// Nodes (or cells) visited and primitive tests per ray pair (closest and
-/// any hit), measured in session 8: `(scene, accelerator, nodes, tests)`.
+/// any hit), as measured when the table was written: `(scene, accelerator,
+/// nodes, tests)`.
 const MEASURED: [(&str, &str, f64, f64); 14] = [
     ("soup", "grid", 22.94, 8.37),
     ("soup", "octree", 21.69, 23.45),

@@ -13,6 +13,11 @@ use glint::viz::grid::GridView;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+// The server of `glint serve`, shared: `-gui` starts it.
+#[path = "glint/serve/mod.rs"]
+#[allow(dead_code)]
+mod serve;
+
 fn main() -> ExitCode {
     app::run_guarded("raytracer", real_main)
 }
@@ -84,7 +89,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-gui",
         "",
-        "accepted and ignored (the course's OpenGL preview)",
+        "the course's preview, in a browser: starts `glint serve` on the scene and prints its address",
     ),
     (
         "-tessellation",
@@ -204,12 +209,30 @@ fn real_main() -> ExitCode {
         Ok(j) => j,
         Err(msg) => return app::exit("raytracer", Err(app::usage(msg))),
     };
+    if args.iter().any(|a| a == "-gui") {
+        return app::exit("raytracer", gui(&job));
+    }
     let result = app::run_job("raytracer", &job, FlagNames::Course, quiet).map(|report| {
         if stats {
             print!("{}", glint::job::course_stats_text(&report));
         }
     });
     app::exit("raytracer", result)
+}
+
+/// `-gui`: the course's OpenGL preview becomes `glint serve`'s page, with
+/// the command line's size, bounces, weight, shadows and accelerator.
+fn gui(job: &Job) -> Result<(), glint::job::JobError> {
+    let defaults = serve::params::Defaults {
+        size: (job.width, job.height),
+        bounces: job.shading.bounces,
+        weight: job.shading.weight_cutoff,
+        shadows: job.shading.shadows,
+        shade_back: job.shading.shade_back,
+        spp: job.sampling.sampler().map_or(64, |s| s.spp()),
+        accel: job.build.accel.to_string(),
+    };
+    serve::serve(&job.input, None, None, defaults, "raytracer").map_err(app::usage)
 }
 
 /// Flags of the course's OpenGL preview: accepted so the handouts' lines run.
@@ -269,7 +292,9 @@ fn parse(args: &[String]) -> Result<(Job, bool, bool), String> {
                     for _ in 0..*n {
                         value("its arguments")?;
                     }
-                    ignored.push(*f);
+                    if *f != "-gui" {
+                        ignored.push(*f);
+                    }
                 }
                 None => {
                     return Err(format!(

@@ -44,6 +44,25 @@ pub fn load_scene_files(path: &Path) -> Result<(Scene, Vec<PathBuf>), ParseError
     Ok((scene, files))
 }
 
+/// Decides whether a scene may read a mesh file, before it is opened: given
+/// the path the scene names (relative names joined to the scene's folder), it
+/// returns the path to read, or an error whose text the parse error quotes at
+/// the `obj_file` token. `glint serve` uses one to keep every file inside its
+/// root and to refuse anything but regular files (a FIFO would block).
+pub type MeshGate<'a> = &'a (dyn Fn(&Path) -> std::io::Result<PathBuf> + Sync);
+
+/// [`load_scene_files`] for an MIT 6.837 scene file whose mesh files are
+/// first passed through `gate`. The scene file itself is read as given: the
+/// caller checks it.
+pub fn load_scene_gated(path: &Path, gate: MeshGate) -> Result<(Scene, Vec<PathBuf>), ParseError> {
+    let bytes = input::read_input(path)
+        .map_err(|e| ParseError::unreadable(path, &e, "a readable scene file"))?;
+    let src = diagnostic::decode(&bytes, path)?;
+    let (scene, mut files) = mit6837::parse_gated(src, path, Some(gate))?;
+    files.insert(0, path.into());
+    Ok((scene, files))
+}
+
 /// The BOM-skipping UTF-8 decoding `load_scene` applies, for the parser's tests.
 #[cfg(test)]
 pub(crate) fn diagnostic_decode_for_tests(bytes: &[u8]) -> &str {

@@ -4,8 +4,8 @@
 //! ambient term.
 
 use super::{Integrator, RayKind, RayObserver};
-use crate::light::area::concentric_disk;
-use crate::math::{Ray, SurfacePoint, Vec2, Vec3};
+pub use crate::math::warp::cosine_hemisphere;
+use crate::math::{Ray, SurfacePoint, Vec3};
 use crate::sampler::SampleStream;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
@@ -27,15 +27,6 @@ impl Default for AoSettings {
             distance: f32::INFINITY,
         }
     }
-}
-
-/// A direction of the hemisphere around unit `n` with density `cos θ / π`
-/// (Malley: a point of the unit disk lifted onto the hemisphere).
-pub fn cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
-    let d = concentric_disk(u);
-    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
-    let (t1, t2) = n.any_orthonormal_pair();
-    (t1 * d.x + t2 * d.y + n * z).normalize_or(n)
 }
 
 /// Fraction of `ao.samples` cosine-weighted rays from the surface point
@@ -129,6 +120,7 @@ impl Integrator for AmbientOcclusion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Vec2;
 
     #[test]
     fn cosine_directions_have_the_right_mean() {

@@ -93,7 +93,7 @@ impl Job {
             world_ms,
             render: traced.time,
             primitives: world.prims().len(),
-            bounds: world.bounds(),
+            bounds: world_space(world.bounds(), world.origin()),
             frame: traced.rendered.frame,
             settings: traced.settings,
             scene: loaded.scene,
@@ -229,6 +229,19 @@ impl Job {
             parts.push_str(&format!("|integrator {}", self.integrator));
         }
         crate::piece::settings_hash(scene, &parts)
+    }
+}
+
+/// `b` (rendering space) moved back to world space by the rendering
+/// origin `o`; an empty box stays empty.
+fn world_space(b: crate::math::Aabb, o: glam::DVec3) -> crate::math::Aabb {
+    if b.is_empty() {
+        return b;
+    }
+    let shift = |v: crate::math::Vec3| (v.as_dvec3() + o).as_vec3();
+    crate::math::Aabb {
+        min: shift(b.min),
+        max: shift(b.max),
     }
 }
 

@@ -25,7 +25,9 @@ pub struct Report {
     pub render: Duration,
     /// Number of primitives in the world.
     pub primitives: usize,
-    /// Bounds of the world's bounded primitives (planes excluded).
+    /// Bounds of the world's bounded primitives (planes excluded), in world
+    /// space (the scene file's coordinates, not the camera-centred rendering
+    /// space).
     pub bounds: crate::math::Aabb,
     /// The rendered planes.
     pub frame: Frame,

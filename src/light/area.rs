@@ -4,6 +4,7 @@
 //! whole contribution.
 
 use super::Incident;
+pub use crate::math::warp::concentric_disk;
 use crate::math::{gamma, SurfacePoint, Vec2, Vec3};
 use crate::scene::AreaShape;
 use std::f32::consts::{PI, TAU};
@@ -37,14 +38,8 @@ pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
             edge1,
             edge2,
         } => {
-            let n = edge1.cross(edge2);
-            let area = n.length();
-            let (a, b) = (u.x * edge1, u.y * edge2);
-            let y = corner + a + b;
-            // Two products and two sums per coordinate.
-            let error = gamma(4) * (corner.abs() + a.abs() + b.abs());
-            let n = n / area.max(f32::MIN_POSITIVE);
-            from_area_point(p, SurfacePoint { p: y, error, n }, area, radiance)
+            let (at, area) = quad_point(corner, edge1, edge2, u);
+            from_area_point(p, at, area, radiance)
         }
         AreaShape::Disk {
             center,
@@ -52,35 +47,73 @@ pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
             radius,
         } => {
             let n = normal.normalize_or_zero();
-            let (t1, t2) = n.any_orthonormal_pair();
-            let d = concentric_disk(u) * radius;
-            let (a, b) = (d.x * t1, d.y * t2);
-            let y = center + a + b;
-            // Off the disk's plane only by the rounding of the in-plane
-            // offsets (`t1`, `t2` are unit within a few ulps) and the sums.
-            let error = gamma(6) * (center.abs() + a.abs() + b.abs());
-            from_area_point(
-                p,
-                SurfacePoint { p: y, error, n },
-                PI * radius * radius,
-                radiance,
-            )
+            let at = disk_point(center, n, radius, u);
+            from_area_point(p, at, PI * radius * radius, radiance)
         }
-        AreaShape::Sphere { center, radius } => sample_sphere(center, radius, radiance, p, u),
+        AreaShape::Sphere { center, radius } => match sphere_cone(center, radius, p, u) {
+            None => Incident::NONE, // inside the light: it lights nothing here
+            Some(cone) => {
+                let solid_angle = TAU * (1.0 - cone.cos_max);
+                Incident {
+                    to_light: cone.w,
+                    color: radiance * solid_angle,
+                    at: Some(cone.at),
+                }
+            }
+        },
     }
 }
 
-fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Incident {
-    let (y, n) = (at.p, at.n);
-    let d = y - p;
+/// The point of the parallelogram `corner + s·edge1 + t·edge2` at
+/// `(s, t) = u`, with its error bound and unit normal `edge1 × edge2`, and
+/// the parallelogram's (one-sided) area.
+#[inline]
+pub(super) fn quad_point(corner: Vec3, edge1: Vec3, edge2: Vec3, u: Vec2) -> (SurfacePoint, f32) {
+    let n = edge1.cross(edge2);
+    let area = n.length();
+    let (a, b) = (u.x * edge1, u.y * edge2);
+    let y = corner + a + b;
+    // Two products and two sums per coordinate.
+    let error = gamma(4) * (corner.abs() + a.abs() + b.abs());
+    let n = n / area.max(f32::MIN_POSITIVE);
+    (SurfacePoint { p: y, error, n }, area)
+}
+
+/// The point of the disk around `center` with unit normal `n` chosen by
+/// `u` (uniform over its area), with its error bound.
+#[inline]
+pub(super) fn disk_point(center: Vec3, n: Vec3, radius: f32, u: Vec2) -> SurfacePoint {
+    let (t1, t2) = n.any_orthonormal_pair();
+    let d = concentric_disk(u) * radius;
+    let (a, b) = (d.x * t1, d.y * t2);
+    let y = center + a + b;
+    // Off the disk's plane only by the rounding of the in-plane
+    // offsets (`t1`, `t2` are unit within a few ulps) and the sums.
+    let error = gamma(6) * (center.abs() + a.abs() + b.abs());
+    SurfacePoint { p: y, error, n }
+}
+
+/// From `p` towards the light point `at`: the unit direction, the squared
+/// distance and the cosine between the light's normal and the direction
+/// (signed); `None` when the point is `p` itself or too far for f32.
+#[inline]
+pub(super) fn toward(p: Vec3, at: &SurfacePoint) -> Option<(Vec3, f32, f32)> {
+    let d = at.p - p;
     let dist2 = d.length_squared();
     if dist2 == 0.0 || !dist2.is_finite() {
-        return Incident::NONE;
+        return None;
     }
     let dist = dist2.sqrt();
     let w = d / dist;
+    Some((w, dist2, at.n.dot(w)))
+}
+
+fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Incident {
+    let Some((w, dist2, cos)) = toward(p, &at) else {
+        return Incident::NONE;
+    };
     // Both faces emit.
-    let cos_l = n.dot(w).abs();
+    let cos_l = cos.abs();
     Incident {
         to_light: w,
         color: radiance * (cos_l * area / dist2),
@@ -88,17 +121,35 @@ fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Inci
     }
 }
 
-/// Uniform over the cone of directions the sphere subtends: every sample
-/// hits the visible cap, and the density `1 / Ω` is the same for all.
-fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
+/// A direction of the cone a sphere subtends from a point outside it, and
+/// where it meets the sphere.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ConeSample {
+    /// Unit direction from the point.
+    pub w: Vec3,
+    /// The nearest point of the sphere along `w`.
+    pub at: SurfacePoint,
+    /// Cosine of the cone's half-angle.
+    pub cos_max: f32,
+    /// `sin²` of the half-angle, `r²/d²` (exact where `1 − cos_max`
+    /// cancels, for small or far spheres).
+    pub sin2_max: f32,
+}
+
+/// Uniform over the cone of directions the sphere subtends from `p`: every
+/// sample hits the visible cap, and the density `1 / Ω` is the same for
+/// all. `None` when `p` is inside the sphere.
+#[inline]
+pub(super) fn sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> Option<ConeSample> {
     let to_c = c - p;
     let d2 = to_c.length_squared();
     if d2 <= r * r {
-        return Incident::NONE; // inside the light: it lights nothing here
+        return None;
     }
     let d = d2.sqrt();
     let axis = to_c / d;
-    let cos_max = (1.0 - r * r / d2).max(0.0).sqrt();
+    let sin2_max = r * r / d2;
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
     let cos_t = 1.0 - u.x * (1.0 - cos_max);
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
     let phi = TAU * u.y;
@@ -108,7 +159,6 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     let b = w.dot(to_c);
     let disc = (r * r - (d2 - b * b)).max(0.0);
     let t = b - disc.sqrt();
-    let solid_angle = TAU * (1.0 - cos_max);
     // The point re-projected onto the sphere (pbrt bounds its object-space
     // version by `|y|`; here the centre is not at the origin).
     let y = p + w * t;
@@ -119,33 +169,18 @@ fn sample_sphere(c: Vec3, r: f32, radiance: Vec3, p: Vec3, u: Vec2) -> Incident 
     // the rounding of the sum: bounded by the terms' sizes, not by `|y|`,
     // which is small where the centre and the offset cancel.
     let error = gamma(5) * (c.abs() + rn.abs());
-    Incident {
-        to_light: w,
-        color: radiance * solid_angle,
-        at: Some(SurfacePoint { p: y, error, n }),
-    }
-}
-
-/// Shirley and Chiu's concentric map from the square to the unit disk: it
-/// keeps strata compact (a polar map squeezes them near the centre).
-pub fn concentric_disk(u: Vec2) -> Vec2 {
-    let a = 2.0 * u - Vec2::ONE;
-    if a == Vec2::ZERO {
-        return Vec2::ZERO;
-    }
-    let (r, theta) = if a.x.abs() > a.y.abs() {
-        (a.x, PI / 4.0 * (a.y / a.x))
-    } else {
-        (a.y, PI / 2.0 - PI / 4.0 * (a.x / a.y))
-    };
-    Vec2::new(theta.cos(), theta.sin()) * r
+    Some(ConeSample {
+        w,
+        at: SurfacePoint { p: y, error, n },
+        cos_max,
+        sin2_max,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::testing::{check_error_box, Lcg};
-    use glam::DVec3;
 
     /// Mean of the estimator over a fine grid of samples.
     fn irradiance(shape: &AreaShape, p: Vec3, n: Vec3) -> f32 {
@@ -367,54 +402,5 @@ mod tests {
                 check_error_box(at, truth, Some(n), limit, &format!("{sphere:?} at {u}"));
             }
         }
-    }
-
-    /// Equal areas of the square go to equal areas of the disk: over a
-    /// fine grid, the moments and the share of each ring and sector are a
-    /// uniform disk's.
-    #[test]
-    fn concentric_map_is_uniform_over_the_disk() {
-        let k = 200;
-        let (mut m, mut inner) = (DVec3::ZERO, 0);
-        let mut sectors = [0u32; 8];
-        for i in 0..k {
-            for j in 0..k {
-                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
-                let d = concentric_disk(u).as_dvec2();
-                m += DVec3::new(d.x, d.y, d.x * d.x);
-                inner += u32::from(d.length() < 0.5);
-                let a = d.y.atan2(d.x).rem_euclid(std::f64::consts::TAU);
-                sectors[((a / std::f64::consts::FRAC_PI_4) as usize).min(7)] += 1;
-            }
-        }
-        let n = (k * k) as f64;
-        let m = m / n;
-        assert!(m.x.abs() < 1e-3 && m.y.abs() < 1e-3, "mean {m}");
-        assert!((m.z - 0.25).abs() < 1e-3, "E[x²] {}", m.z);
-        assert!((inner as f64 / n - 0.25).abs() < 2e-3, "inner ring {inner}");
-        for s in sectors {
-            assert!((s as f64 / n - 0.125).abs() < 2e-3, "{sectors:?}");
-        }
-        // And continuously (what keeps strata compact): neighbours on the
-        // grid stay neighbours, across the diagonals between the branches.
-        let at = |i: i32, j: i32| concentric_disk(Vec2::new(i as f32, j as f32) / k as f32);
-        for i in 0..k {
-            for j in 0..k {
-                let d = at(i, j);
-                let step = (at(i + 1, j) - d).length().max((at(i, j + 1) - d).length());
-                assert!(step < 4.0 / k as f32, "({i}, {j}): {step}");
-            }
-        }
-    }
-
-    #[test]
-    fn concentric_map_stays_in_the_disk() {
-        for i in 0..=10 {
-            for j in 0..=10 {
-                let d = concentric_disk(Vec2::new(i as f32 / 10.0, j as f32 / 10.0));
-                assert!(d.length() <= 1.0 + 1e-6);
-            }
-        }
-        assert!((concentric_disk(Vec2::new(1.0, 0.5)) - Vec2::X).length() < 1e-6);
     }
 }

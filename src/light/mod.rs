@@ -1,9 +1,14 @@
 //! Light sampling: what a light sends to a surface point. Point and
 //! directional lights send it along one direction ([`incident`]); area lights
 //! ([`area`]) are sampled: [`sample_light`] takes a 2-D sample choosing a
-//! point of the light.
+//! point of the light. These are the Whitted tree's entry points (the light
+//! already divided by its density); [`source`] has the runtime lights that
+//! report their densities, and emitter surfaces.
 
 pub mod area;
+pub mod source;
+
+pub use source::{AreaLight, Emitter, EmitterHit, LightPoint, LightSample, LightSource};
 
 use crate::math::{SurfacePoint, Vec2, Vec3};
 use crate::scene::Light;
@@ -68,15 +73,20 @@ pub fn incident(light: &Light, p: Vec3) -> Incident {
             position,
             color,
             attenuation,
-        } => {
-            let d = position.as_dvec3() - p.as_dvec3();
-            let dist = d.length();
-            Incident {
-                to_light: d.normalize_or_zero().as_vec3(),
-                color: *color * attenuation_factor(*attenuation, dist as f32),
-                at: None,
-            }
-        }
+        } => point_incident(*position, *color, *attenuation, p),
+    }
+}
+
+/// What a point light at `position` sends to `p`: direction and distance
+/// in f64, the colour attenuated.
+#[inline]
+pub(crate) fn point_incident(position: Vec3, color: Vec3, attenuation: Vec3, p: Vec3) -> Incident {
+    let d = position.as_dvec3() - p.as_dvec3();
+    let dist = d.length();
+    Incident {
+        to_light: d.normalize_or_zero().as_vec3(),
+        color: color * attenuation_factor(attenuation, dist as f32),
+        at: None,
     }
 }
 

@@ -36,6 +36,28 @@ pub fn sample_lobe(axis: Vec3, side: Vec3, e: f32, u: Vec2) -> Vec3 {
     }
 }
 
+/// The density (per unit solid angle) with which [`sample_lobe`] returns
+/// the unit direction `w`: the `cos^e α` lobe, `(e+1)/(2π)·cos^e α` over the
+/// hemisphere around `axis`, plus the same at `w`'s mirror image across the
+/// tangent plane (the directions that were folded onto `w`); 0 on the wrong
+/// side of the surface.
+pub fn lobe_pdf(axis: Vec3, side: Vec3, e: f32, w: Vec3) -> f32 {
+    let s = w.dot(side);
+    if s < 0.0 {
+        return 0.0;
+    }
+    let folded = w - 2.0 * s * side;
+    let lobe = |v: Vec3| {
+        let c = v.dot(axis);
+        if c > 0.0 {
+            c.powf(e)
+        } else {
+            0.0
+        }
+    };
+    (e + 1.0) / TAU * (lobe(w) + lobe(folded))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,6 +9,7 @@ mod ray;
 mod spawn;
 #[cfg(test)]
 pub(crate) mod testing;
+pub mod warp;
 
 pub use aabb::Aabb;
 pub use float::gamma;

@@ -49,3 +49,22 @@ pub(crate) fn check_error_box(
     }
     assert!(at.error.cmple(limit).all(), "{what}: box {e} over {limit}");
 }
+
+/// Midpoint quadrature over the sphere on an equal-area grid (`z` and `φ`
+/// uniform): `∫ g(ω) dω ≈ Σ g · 4π/N`, per channel. With 600 × 1200 cells
+/// (each about 0.006 rad across; thin wedges at the poles) a lobe of
+/// exponent up to 40 is integrated to better than 2e-3 wherever it points.
+pub(crate) fn sphere_integral(mut g: impl FnMut(Vec3) -> Vec3) -> DVec3 {
+    let (nz, nphi) = (600, 1200);
+    let mut sum = DVec3::ZERO;
+    for i in 0..nz {
+        let z = -1.0 + 2.0 * (i as f64 + 0.5) / nz as f64;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        for j in 0..nphi {
+            let phi = std::f64::consts::TAU * (j as f64 + 0.5) / nphi as f64;
+            let w = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+            sum += g(w).as_dvec3();
+        }
+    }
+    sum * 4.0 * std::f64::consts::PI / (nz * nphi) as f64
+}

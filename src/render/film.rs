@@ -293,6 +293,34 @@ pub fn merge(films: &[Option<TileFilm>], tile_size: u32, support: u32, frame: &m
         );
 }
 
+/// After [`merge`] of a render limited to `region` (tiles skipped where
+/// their films cannot reach it): marks the rows of `region` complete when
+/// every tile whose film reaches into `region` was rendered, so a crop of
+/// any shape is complete without the tile columns it does not need. Rows
+/// outside `region` keep [`merge`]'s answer.
+pub fn complete_region(
+    films: &[Option<TileFilm>],
+    rects: &[Rect],
+    support: u32,
+    region: Rect,
+    frame: &mut Frame,
+) {
+    let (w, h) = (frame.width, frame.height);
+    let needed = rects
+        .iter()
+        .zip(films)
+        .filter(|(t, _)| t.grown(support, w, h).overlaps(&region));
+    let mut all = true;
+    for (_, f) in needed {
+        all &= f.is_some();
+    }
+    if all {
+        for row in region.row0..region.row1.min(h) {
+            frame.complete[row as usize] = true;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -424,6 +452,43 @@ mod tests {
                         let wt = filter.weight(o.x - 0.5 - a as f32, o.y - 0.5 - b as f32);
                         let c = Vec3::new((x as i32 - a) as f32, (row as i32 + b) as f32, 1.0);
                         sum += wt * c;
+                        total += wt;
+                    }
+                }
+                let want = sum / total;
+                let got = frame.color[(row * w + x) as usize];
+                assert!(
+                    (got - want).abs().max_element() < 1e-5,
+                    "({x}, {row}): {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    /// The same closed form on every pixel, borders and corners included: a
+    /// border pixel receives only the samples of pixels inside the image
+    /// (what the filter reaches beyond the edge is dropped, not clamped onto
+    /// the edge pixel), so its colour is the weighted mean over the in-image
+    /// neighbours alone.
+    #[test]
+    fn border_pixels_are_the_closed_form_means_of_in_image_samples() {
+        let (w, h) = (9i32, 8i32);
+        let filter = Filter::Tent(1.5);
+        let o = Vec2::new(0.3, 0.6);
+        let frame = splat_every_pixel((w as u32, h as u32), 4, filter, o, |x, row| {
+            Vec3::new(x as f32, row as f32, 1.0)
+        });
+        for row in 0..h {
+            for x in 0..w {
+                let (mut sum, mut total) = (Vec3::ZERO, 0.0);
+                for a in -2i32..=2 {
+                    for b in -2i32..=2 {
+                        let (sx, srow) = (x - a, row + b);
+                        if !(0..w).contains(&sx) || !(0..h).contains(&srow) {
+                            continue;
+                        }
+                        let wt = filter.weight(o.x - 0.5 - a as f32, o.y - 0.5 - b as f32);
+                        sum += wt * Vec3::new(sx as f32, srow as f32, 1.0);
                         total += wt;
                     }
                 }

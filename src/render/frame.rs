@@ -38,7 +38,8 @@ pub struct Frame {
     /// shared between pixels).
     pub cost: Vec<PixelCost>,
     /// Per row (top first): whether it was rendered (a cancelled render
-    /// leaves rows out).
+    /// leaves rows out; a render of a region marks the region's rows when
+    /// the region's pixels in them are).
     pub complete: Vec<bool>,
 }
 

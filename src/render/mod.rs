@@ -237,6 +237,9 @@ fn render_tiles<I: Integrator>(
         settings.filter.support(),
         &mut frame,
     );
+    if let Some(r) = region {
+        film::complete_region(&films, &rects, support, r, &mut frame);
+    }
     Rendered {
         frame,
         counters,

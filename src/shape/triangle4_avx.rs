@@ -166,7 +166,7 @@ mod tests {
     /// the 4-lane test agrees with the scalar test on every lane.
     #[test]
     fn agrees_with_the_scalar_test_bit_for_bit() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        if !crate::testdata::avx2_fma("agrees_with_the_scalar_test_bit_for_bit") {
             return;
         }
         let mut g = Lcg(11);
@@ -206,7 +206,7 @@ mod tests {
     /// overflow f32, and a ray along a triangle's plane.
     #[test]
     fn nan_huge_and_edge_on_lanes_agree() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        if !crate::testdata::avx2_fma("nan_huge_and_edge_on_lanes_agree") {
             return;
         }
         let nan = Vec3::splat(f32::NAN);

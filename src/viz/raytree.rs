@@ -204,15 +204,10 @@ impl RayTree {
     pub fn draw(&self, canvas: &mut Canvas, camera: &CameraModel) -> usize {
         let (w, h) = (canvas.width, canvas.height);
         let mut visible = 0;
-        for r in &self.rays {
-            let (a, b) = (r.ray.origin, r.ray.at(segment_end(r)));
-            let Some((a, b)) = clip_to_front(camera, a, b) else {
+        for (r, seg) in self.rays.iter().zip(self.projected(camera, (w, h))) {
+            let Some((pa, pb)) = seg else {
                 continue;
             };
-            let (Some(sa), Some(sb)) = (camera.project(a), camera.project(b)) else {
-                continue;
-            };
-            let (pa, pb) = (pixel_of_screen(sa, w, h), pixel_of_screen(sb, w, h));
             let frame = (Vec2::ZERO, Vec2::new(w as f32, h as f32));
             if super::draw::clip(pa, pb, frame.0, frame.1).is_some() {
                 visible += 1;
@@ -224,6 +219,25 @@ impl RayTree {
             }
         }
         visible
+    }
+}
+
+impl RayTree {
+    /// Where each ray's segment appears in a `w`×`h` image seen through
+    /// `camera`: its end points in continuous pixel coordinates (y up from
+    /// the bottom edge, as [`pixel_of_screen`] gives them), unclipped by the
+    /// frame, or `None` when no part of it lies in front of the camera. One
+    /// entry per ray, in [`RayTree::rays`] order: what [`RayTree::draw`]
+    /// draws, and what `glint serve` sends the page.
+    pub fn projected(&self, camera: &CameraModel, (w, h): (u32, u32)) -> Vec<Option<(Vec2, Vec2)>> {
+        self.rays
+            .iter()
+            .map(|r| {
+                let (a, b) = clip_to_front(camera, r.ray.origin, r.ray.at(segment_end(r)))?;
+                let (sa, sb) = (camera.project(a)?, camera.project(b)?);
+                Some((pixel_of_screen(sa, w, h), pixel_of_screen(sb, w, h)))
+            })
+            .collect()
     }
 }
 

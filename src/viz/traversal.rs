@@ -13,7 +13,7 @@ use super::draw::Canvas;
 use crate::accel::bvh::{Bvh, NodeVisit};
 use crate::accel::grid::Face;
 use crate::accel::{AccelKind, Grid, HierarchyBvh, NestedGrid, Octree, PrimHit, Storage};
-use crate::math::{Aabb, Ray, Vec3};
+use crate::math::{Aabb, Ray, Vec2, Vec3};
 use crate::render::{pixel_of_screen, CameraModel};
 use crate::stats::Counters;
 use crate::world::World;
@@ -50,7 +50,9 @@ pub enum Structure {
 
 impl Structure {
     /// Builds the structure `kind` names over `world`'s bounded primitives;
-    /// `None` for brute force, which walks nothing.
+    /// `None` for brute force, which walks nothing, and for the 8-wide BVH,
+    /// whose loops record no walk (drawing its binary SAH twin under its
+    /// name would show another tree).
     pub fn build(world: &World, kind: AccelKind) -> Option<Structure> {
         let ids: Vec<u32> = (0..world.prims().len() as u32)
             .filter(|i| !world.unbounded().contains(i))
@@ -70,11 +72,7 @@ impl Structure {
                 // Built from the world's recorded scene tree, as the renderer's.
                 Structure::Hierarchy(HierarchyBvh::new(world.prims(), ids, world.scene_tree()))
             }
-            // The fast BVH records no walk (its loops are kept free of
-            // observers); its teaching twin, the binary SAH BVH, is shown.
-            AccelKind::Bvh8 => {
-                Structure::Bvh(Bvh::new(world.prims(), ids, crate::accel::Split::Sah))
-            }
+            AccelKind::Bvh8 => return None,
         })
     }
 
@@ -188,7 +186,7 @@ fn visit_color(v: &Visit, last: bool, hit: bool, bvh: bool) -> Vec3 {
 }
 
 /// The 12 edges of a box.
-pub(crate) fn box_edges(b: &Aabb) -> Vec<(Vec3, Vec3)> {
+pub fn box_edges(b: &Aabb) -> Vec<(Vec3, Vec3)> {
     let corner = |i: usize| {
         Vec3::new(
             if i & 1 == 0 { b.min.x } else { b.max.x },
@@ -250,29 +248,47 @@ pub fn segments(
 /// Draws `segments` over `canvas` in the camera's projection.
 pub fn draw(canvas: &mut Canvas, camera: &CameraModel, segments: &[((Vec3, Vec3), Vec3)]) {
     let (w, h) = (canvas.width, canvas.height);
-    for &((a, b), c) in segments {
-        let (da, db) = (camera.depth_of(a), camera.depth_of(b));
-        let (a, b) = if camera.is_perspective() {
-            let near = 1e-4 * da.abs().max(db.abs()).max(1e-6);
-            match (da >= near, db >= near) {
-                (true, true) => (a, b),
-                (false, false) => continue,
-                _ => {
-                    let m = a + (b - a) * ((near - da) / (db - da));
-                    if da >= near {
-                        (a, m)
-                    } else {
-                        (m, b)
-                    }
-                }
-            }
-        } else {
-            (a, b)
-        };
-        if let (Some(sa), Some(sb)) = (camera.project(a), camera.project(b)) {
-            canvas.line(pixel_of_screen(sa, w, h), pixel_of_screen(sb, w, h), c, 0);
+    for (&(_, c), p) in segments.iter().zip(project(camera, segments, (w, h))) {
+        if let Some((a, b)) = p {
+            canvas.line(a, b, c, 0);
         }
     }
+}
+
+/// Where each segment appears in a `w`×`h` image seen through `camera`:
+/// its end points in continuous pixel coordinates (y up from the bottom
+/// edge), the part behind a perspective camera cut off, or `None` when none
+/// of it is in front. What [`draw`] draws, and what `glint serve` sends.
+pub fn project(
+    camera: &CameraModel,
+    segments: &[((Vec3, Vec3), Vec3)],
+    (w, h): (u32, u32),
+) -> Vec<Option<(Vec2, Vec2)>> {
+    segments
+        .iter()
+        .map(|&((a, b), _)| {
+            let (da, db) = (camera.depth_of(a), camera.depth_of(b));
+            let (a, b) = if camera.is_perspective() {
+                let near = 1e-4 * da.abs().max(db.abs()).max(1e-6);
+                match (da >= near, db >= near) {
+                    (true, true) => (a, b),
+                    (false, false) => return None,
+                    _ => {
+                        let m = a + (b - a) * ((near - da) / (db - da));
+                        if da >= near {
+                            (a, m)
+                        } else {
+                            (m, b)
+                        }
+                    }
+                }
+            } else {
+                (a, b)
+            };
+            let (sa, sb) = (camera.project(a)?, camera.project(b)?);
+            Some((pixel_of_screen(sa, w, h), pixel_of_screen(sb, w, h)))
+        })
+        .collect()
 }
 
 /// Segments as OBJ lines with per-vertex colours.

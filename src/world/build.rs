@@ -18,6 +18,7 @@ use crate::accel::{
     AccelKind, Aggregate, Brute, Bvh, Bvh8, Grid, HierarchyBvh, NestedGrid, Octree, SceneTree,
     Storage,
 };
+use crate::light::LightSource;
 use crate::math::Vec3;
 use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, ShapeDesc as Desc};
 use crate::shape::{Moving, Plane, Shape, Sphere, Transformed, Triangle};
@@ -83,9 +84,14 @@ impl World {
         let lights: Vec<Light> = (scene.lights.iter())
             .map(|l| light_to_render_space(l, origin))
             .collect();
+        let sources: Vec<LightSource> = lights.iter().map(LightSource::from_scene).collect();
+        let emitters = (0..sources.len() as u32)
+            .filter(|&i| !sources[i as usize].is_delta())
+            .collect();
         World {
             build_ms: start.elapsed().as_secs_f64() * 1e3,
-            prepared_lights: super::lights::PreparedLights::new(&lights),
+            sources,
+            emitters,
             lights,
             prims: f.prims,
             accel,

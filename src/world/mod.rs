@@ -13,12 +13,12 @@
 //! world-space point or ray is brought in with [`World::ray_from_world`].
 
 mod build;
-mod lights;
 
 pub use crate::primitive::Primitive;
 pub use build::BuildOptions;
 
 use crate::accel::Aggregate;
+use crate::light::{EmitterHit, Incident, LightSource};
 use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
 use crate::scene::{Background, Camera, Light, Material};
 use crate::shape::Shape;
@@ -98,8 +98,12 @@ pub struct World {
     /// The scene's object tree over `prims` (groups, transforms, shapes), as
     /// flattening met it: what `bvh-hierarchy` is built from.
     scene_tree: crate::accel::SceneTree,
-    /// What of `lights` is the same at every shading point, prepared once.
-    prepared_lights: lights::PreparedLights,
+    /// The lights as the integrators use them, index for index with
+    /// `lights`: built once (directions normalised, radiances computed).
+    sources: Vec<LightSource>,
+    /// Indices of the area lights in `sources`: surfaces a ray can hit,
+    /// kept out of the aggregate (the Whitted tree never sees them).
+    emitters: Vec<u32>,
 }
 
 impl World {
@@ -211,11 +215,51 @@ impl World {
     }
 
     /// What the world's light number `index` sends to point `p`:
-    /// `light::incident(&self.lights()[index], p)`, with a directional
-    /// light's normalised direction prepared once with the world.
+    /// `light::incident(&self.lights()[index], p)`, bit for bit, from the
+    /// light source prepared with the world.
     #[inline]
-    pub fn incident(&self, index: usize, p: Vec3) -> crate::light::Incident {
-        self.prepared_lights.incident(index, &self.lights[index], p)
+    pub fn incident(&self, index: usize, p: Vec3) -> Incident {
+        match self.sources[index].incident(p) {
+            Some(inc) => inc,
+            None => crate::light::incident(&self.lights[index], p),
+        }
+    }
+
+    /// The lights as the integrators that weigh samples use them, index for
+    /// index with [`lights`](Self::lights).
+    #[inline]
+    pub fn light_sources(&self) -> &[LightSource] {
+        &self.sources
+    }
+
+    /// Indices (into [`light_sources`](Self::light_sources)) of the lights
+    /// with a surface.
+    pub fn emitters(&self) -> &[u32] {
+        &self.emitters
+    }
+
+    /// The closest hit with `tmin < t < tmax` on the surface of an area
+    /// light, and which light it is. Area lights are not in the aggregate
+    /// ([`intersect`](Self::intersect) and [`occluded`](Self::occluded) do
+    /// not see them, so the Whitted tree's rays and statistics are what they
+    /// were); an integrator that sees emitters asks here too, with `tmax` at
+    /// its closest hit.
+    pub fn intersect_emitters(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        mut tmax: f32,
+    ) -> Option<(u32, EmitterHit)> {
+        let mut best = None;
+        for &i in &self.emitters {
+            if let LightSource::Area(a) = &self.sources[i as usize] {
+                if let Some(h) = a.intersect(ray, tmin, tmax) {
+                    tmax = h.t;
+                    best = Some((i, h));
+                }
+            }
+        }
+        best
     }
 
     /// Whether anything lies on the ray with `tmin < t < tmax`.
@@ -306,5 +350,85 @@ impl World {
     /// Bounds of the bounded primitives (planes excluded).
     pub fn bounds(&self) -> Aabb {
         self.accel.bounds()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{AreaShape, Node, Scene, ShapeDesc as Desc};
+
+    /// A quad light over a sphere: the aggregate and the occlusion test see
+    /// only the sphere (the Whitted tree's rays are what they were), and
+    /// `intersect_emitters` finds the light with its radiance, nearest first
+    /// and only within `tmax`.
+    #[test]
+    fn emitters_are_seen_only_on_request() {
+        let quad = AreaShape::Quad {
+            corner: Vec3::new(-1.0, 3.0, -1.0),
+            edge1: Vec3::new(2.0, 0.0, 0.0),
+            edge2: Vec3::new(0.0, 0.0, 2.0),
+        };
+        let scene = Scene {
+            camera: Camera::Orthographic {
+                center: Vec3::ZERO,
+                direction: Vec3::NEG_Z,
+                up: Vec3::Y,
+                size: 1.0,
+            },
+            lights: vec![
+                Light::Point {
+                    position: Vec3::new(0.0, 5.0, 0.0),
+                    color: Vec3::ONE,
+                    attenuation: Vec3::X,
+                },
+                Light::Area {
+                    shape: quad,
+                    color: Vec3::ONE,
+                    power: 8.0,
+                },
+            ],
+            background: Background::default(),
+            materials: vec![],
+            root: Node::Group(vec![Node::Shape {
+                shape: Desc::Sphere {
+                    center: Vec3::ZERO,
+                    radius: 1.0,
+                },
+                material: None,
+            }]),
+            effects: Default::default(),
+        };
+        let world = World::build_world_space(&scene, BuildOptions::default());
+        assert_eq!(world.emitters(), &[1]);
+        assert_eq!(world.light_sources().len(), 2);
+        let mut c = Counters::default();
+        let up = Ray::new(Vec3::new(0.2, 1.5, 0.1), Vec3::Y);
+        assert!(world.intersect(&up, 0.0, f32::INFINITY, &mut c).is_none());
+        assert!(!world.occluded(&up, 0.0, f32::INFINITY, &mut c));
+        let (i, h) = world.intersect_emitters(&up, 0.0, f32::INFINITY).unwrap();
+        assert_eq!(i, 1);
+        assert!(
+            (h.t - 1.5).abs() < 1e-6 && (h.at.p.y - 3.0).abs() < 1e-6,
+            "{h:?}"
+        );
+        // Power 8 over both faces of a 2 × 2 quad: radiance 8/(π·8).
+        assert!(
+            (h.le - Vec3::splat(1.0 / std::f32::consts::PI))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert!(world.intersect_emitters(&up, 0.0, 1.4).is_none());
+        // From below the sphere, the light is still there (the caller limits
+        // `tmax` to its own closest hit).
+        let from_below = Ray::new(Vec3::new(0.0, -2.0, 0.0), Vec3::Y);
+        let hit = world
+            .intersect(&from_below, 0.0, f32::INFINITY, &mut c)
+            .unwrap();
+        assert!(world.intersect_emitters(&from_below, 0.0, hit.t).is_none());
+        assert!(world
+            .intersect_emitters(&from_below, 0.0, f32::INFINITY)
+            .is_some());
     }
 }

@@ -81,7 +81,7 @@ fn avx2_fma() -> bool {
 /// offset in the node (no index reloaded per plane from the stack, where
 /// register pressure puts it).
 ///
-/// Used for the any-hit walk only. Measured (session 13, Intel Xeon): the
+/// Used for the any-hit walk only. Measured (Intel Xeon, 2 cores): the
 /// octant copies took 6.1% fewer instructions an any-hit query and 6.6% a
 /// closest one (callgrind, every 16th bunny40k ray); timed, shadow rays ran
 /// 4-8% faster and coherent camera rays 2-3%, but incoherent closest-hit

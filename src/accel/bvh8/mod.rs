@@ -413,9 +413,9 @@ mod tests {
     /// Build quality, which no agreement test can see (any tree gives
     /// the right hits): the SAH cost of the tree and the nodes and
     /// triangles a fixed set of rays visits stay within 3% of the values
-    /// measured when this test was written (session 8; measured again in
-    /// session 16, when the split cost went from 0.5 to 1.0 and leaves
-    /// from 8 to 16 items: fewer nodes, more triangle tests), either way. A
+    /// measured when this test was written (and again when the split cost
+    /// went from 0.5 to 1.0 and leaves from 8 to 16 items: fewer nodes,
+    /// more triangle tests), either way. A
     /// build that splits worse (a wrong bin, a wrong cost, a wrong axis)
     /// exceeds them; a counter that stops counting falls below; a better
     /// build should lower the numbers here.

@@ -14,7 +14,7 @@ mod traverse;
 
 pub use traverse::{Cell, CellWalk, Face};
 
-use super::mailbox::Mailbox;
+use super::mailbox::ItemTests;
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
@@ -140,20 +140,11 @@ impl Grid {
     ) -> Option<PrimHit> {
         let mut best: Option<PrimHit> = None;
         let mut t_best = tmax;
-        let mut seen = Mailbox::new();
+        let mut tests = ItemTests::new(prims, ray, tmin, self.mailbox);
         for cell in self.walk(ray, tmin, tmax) {
             c.nodes_visited += 1;
             visit(&cell);
-            for &id in self.cell_items(cell.index) {
-                if self.mailbox && !seen.first_visit(id) {
-                    continue;
-                }
-                c.intersection_tests += 1;
-                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
-                    t_best = t;
-                    best = Some(PrimHit { t, prim: id });
-                }
-            }
+            tests.closest(self.cell_items(cell.index), &mut best, &mut t_best, c);
             // Accepted only now: nothing in a later cell can be closer.
             if t_best <= cell.t_exit {
                 break;
@@ -188,24 +179,11 @@ impl Aggregate for Grid {
         tmax: f32,
         c: &mut Counters,
     ) -> bool {
-        let mut seen = Mailbox::new();
-        for cell in self.walk(ray, tmin, tmax) {
+        let mut tests = ItemTests::new(prims, ray, tmin, self.mailbox);
+        self.walk(ray, tmin, tmax).any(|cell| {
             c.nodes_visited += 1;
-            for &id in self.cell_items(cell.index) {
-                if self.mailbox && !seen.first_visit(id) {
-                    continue;
-                }
-                c.intersection_tests += 1;
-                if prims[id as usize]
-                    .shape
-                    .intersect(ray, tmin, tmax)
-                    .is_some()
-                {
-                    return true;
-                }
-            }
-        }
-        false
+            tests.any(self.cell_items(cell.index), tmax, c)
+        })
     }
 
     fn bounds(&self) -> Aabb {

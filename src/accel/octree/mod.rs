@@ -40,7 +40,7 @@ pub enum Storage {
     Inner,
 }
 
-use super::mailbox::Mailbox;
+use super::mailbox::ItemTests;
 use super::{Aggregate, PrimHit};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
@@ -179,20 +179,11 @@ impl Octree {
     ) -> Option<PrimHit> {
         let mut best: Option<PrimHit> = None;
         let mut t_best = tmax;
-        let mut seen = Mailbox::new();
+        let mut tests = ItemTests::new(prims, ray, tmin, true);
         let mut walk = self.walk(ray, tmin, tmax);
         for leaf in walk.by_ref() {
             visit(&leaf);
-            for &id in leaf.items {
-                if !seen.first_visit(id) {
-                    continue;
-                }
-                c.intersection_tests += 1;
-                if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, t_best) {
-                    t_best = t;
-                    best = Some(PrimHit { t, prim: id });
-                }
-            }
+            tests.closest(leaf.items, &mut best, &mut t_best, c);
             // Leaves come front to back: nothing later can beat a hit in here.
             if t_best <= leaf.t_exit {
                 break;
@@ -271,25 +262,9 @@ impl Aggregate for Octree {
         tmax: f32,
         c: &mut Counters,
     ) -> bool {
-        let mut seen = Mailbox::new();
+        let mut tests = ItemTests::new(prims, ray, tmin, true);
         let mut walk = self.walk(ray, tmin, tmax);
-        let mut hit = false;
-        'leaves: for leaf in walk.by_ref() {
-            for &id in leaf.items {
-                if !seen.first_visit(id) {
-                    continue;
-                }
-                c.intersection_tests += 1;
-                if prims[id as usize]
-                    .shape
-                    .intersect(ray, tmin, tmax)
-                    .is_some()
-                {
-                    hit = true;
-                    break 'leaves;
-                }
-            }
-        }
+        let hit = walk.by_ref().any(|leaf| tests.any(leaf.items, tmax, c));
         c.nodes_visited += walk.visited;
         hit
     }

@@ -28,6 +28,7 @@ mod deep;
 mod merge;
 mod raytree;
 mod render;
+mod serve;
 mod structure;
 mod traverse;
 
@@ -64,7 +65,7 @@ enum Command {
     },
     /// Time the tile render loop against the old row loop at 1 sample per pixel.
     BenchLoop {
-        /// Scene files (default: three course scenes from ../shared).
+        /// Scene files (default: three course scenes from $GLINT_SHARED or ../shared; exits 2 without them).
         scenes: Vec<PathBuf>,
         /// Square image size.
         #[arg(long, default_value_t = 400)]
@@ -87,9 +88,11 @@ enum Command {
     Structure(structure::StructureArgs),
     /// Assemble the pieces of `glint render --tile I/N` (or --crop) into the whole image.
     Merge(merge::MergeArgs),
+    /// Serve the scene live in a browser on 127.0.0.1: progressive render, click a pixel for its ray tree.
+    Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
-        /// Scene file (MIT 6.837 format).
+        /// Scene file (MIT 6.837 format) or a bare .obj mesh.
         scene: PathBuf,
     },
 }
@@ -139,11 +142,20 @@ fn run(command: Command) -> Result<(), JobError> {
         Command::Info { scene } => info(scene),
         Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
+        Command::Serve(a) => serve::run(a),
         Command::Traverse(a) => traverse::run(a),
         Command::Structure(a) => structure::run(a),
         Command::BenchLoop { scenes, size, runs } => {
             let scenes = if scenes.is_empty() {
-                let dir = PathBuf::from("../shared/scenes/6837");
+                let shared = std::env::var_os("GLINT_SHARED")
+                    .map_or_else(|| PathBuf::from("../shared"), PathBuf::from);
+                let dir = shared.join("scenes/6837");
+                if !dir.is_dir() {
+                    return Err(app::usage(format!(
+                        "the default scenes are the course's, in {} (needs the course data: set GLINT_SHARED); or name scene files, e.g. glint bench-loop scenes/whitted.txt",
+                        dir.display()
+                    )));
+                }
                 [
                     "scene7_01_sphere_triangle.txt",
                     "scene4_14_faceted_gem.txt",

@@ -22,7 +22,12 @@ linear 32-bit values unclamped. An unsupported extension is refused before any w
 
 The eye ray of each pixel goes through the pixel's centre. The `raytracer` command, which \
 runs the course's command lines verbatim, uses the pixel's lower-left corner instead, the \
-course's convention, which its reference images match exactly.";
+course's convention, which its reference images match exactly.
+
+Conventions (docs/scene-format.md, \"Conventions\"): a pixel is diffuse colour x irradiance, with no \
+1/pi; a flat area light's power is shared by its two faces; an orthographic camera sees objects \
+behind its centre plane (rays start at t = -inf, as in the course), a perspective camera does not; \
+`aperture` is the lens radius and the focus is a plane at `focusDistance` along the view direction.";
 
 /// Arguments of `glint render`.
 #[derive(Args)]

@@ -50,7 +50,7 @@ pub fn run(a: StructureArgs) -> Result<(), JobError> {
         Some(Structure::Octree(o)) => glint::viz::structure::octree_boxes(&o),
         _ => {
             return Err(usage(format!(
-                "--accel {accel}: choose octree, octree-inner or a bvh"
+                "--accel {accel}: choose octree, octree-inner, bvh, bvh-median or bvh-midpoint (the 8-wide bvh8 is not drawn)"
             )))
         }
     };

@@ -73,7 +73,7 @@ pub fn run(a: TraverseArgs) -> Result<(), JobError> {
         CameraModel::of_world(&world, &scene.effects).at_time(scene.effects.lens.shutter[0]);
     let structure = Structure::build(&world, accel).ok_or_else(|| {
         usage(format!(
-            "--accel {accel}: no walk to record; choose grid, octree, octree-inner or a bvh"
+            "--accel {accel}: no walk to record; choose grid, nested-grid, octree, octree-inner, bvh, bvh-median, bvh-midpoint or bvh-hierarchy (bvh is the binary SAH BVH; the 8-wide bvh8 records no walk)"
         ))
     })?;
     let bvh = matches!(structure, Structure::Bvh(_));

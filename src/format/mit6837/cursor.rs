@@ -28,6 +28,8 @@ pub(super) struct Parser<'a> {
     pub pending_indices: Vec<(usize, Token<'a>)>,
     /// Meshes loaded so far, so a file named twice is read once.
     pub meshes: HashMap<PathBuf, Arc<Mesh>>,
+    /// Asked before each mesh file is opened (see [`crate::format::MeshGate`]).
+    pub gate: Option<crate::format::MeshGate<'a>>,
     /// Current Group/Transform nesting, bounded so that hostile input cannot
     /// overflow the stack.
     pub depth: usize,
@@ -46,6 +48,7 @@ impl<'a> Parser<'a> {
             material_count: None,
             pending_indices: Vec::new(),
             meshes: HashMap::new(),
+            gate: None,
             depth: 0,
         }
     }

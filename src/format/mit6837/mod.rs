@@ -18,4 +18,4 @@ use crate::format::ParseError;
 /// Results of the parser's readers.
 type Result<T> = std::result::Result<T, ParseError>;
 
-pub(crate) use parser::{parse, parse_with_meshes};
+pub(crate) use parser::{parse, parse_gated, parse_with_meshes};

@@ -318,7 +318,13 @@ impl<'a> Parser<'a> {
         if let Some(mesh) = self.meshes.get(&path) {
             return Ok(ShapeDesc::Mesh(Arc::clone(mesh)));
         }
-        let mesh = match obj::load(&path) {
+        let loaded = match self.gate {
+            Some(gate) => gate(&path)
+                .map_err(LoadError::Io)
+                .and_then(|p| obj::load(&p)),
+            None => obj::load(&path),
+        };
+        let mesh = match loaded {
             Ok(m) => Arc::new(m),
             Err(LoadError::Io(e)) => {
                 // The token may be shortened by `quote`; the path it resolved

@@ -18,7 +18,17 @@ pub(crate) fn parse(src: &str, file: &Path) -> Result<Scene> {
 
 /// [`parse`], and the paths of the mesh files the scene read.
 pub(crate) fn parse_with_meshes(src: &str, file: &Path) -> Result<(Scene, Vec<PathBuf>)> {
+    parse_gated(src, file, None)
+}
+
+/// [`parse_with_meshes`], asking `gate` before each mesh file is opened.
+pub(crate) fn parse_gated<'a>(
+    src: &'a str,
+    file: &'a Path,
+    gate: Option<crate::format::MeshGate<'a>>,
+) -> Result<(Scene, Vec<PathBuf>)> {
     let mut p = Parser::new(src, file);
+    p.gate = gate;
     let mut camera = None;
     let mut lights: Option<Vec<Light>> = None;
     let mut background = None;
