@@ -4,6 +4,8 @@
 #
 #   scripts/image-hashes.sh [COMMIT]     print "name sha256" for every output file of COMMIT (default HEAD)
 #   scripts/image-hashes.sh OLD NEW      both lists side by side: same / DIFFERENT; exit 1 on any difference
+#   scripts/image-hashes.sh --build C    only build C's binaries; print their folder (scripts/bench-ab.sh)
+#   IMAGE_HASHES_ONLY=REGEX              only the runs whose folder matches (e.g. 'tent|pieces|A7-5')
 #
 # COMMIT is anything `git rev-parse` takes; `.` is the working tree as it is (uncommitted edits too).
 # Each commit's release binaries are built in a temporary git worktree, with one cargo target
@@ -68,6 +70,7 @@ build() {
 run_into() {
   local out=$1
   shift
+  [[ $out =~ ${IMAGE_HASHES_ONLY:-.} ]] || return 0
   mkdir -p "$out"
   local rc=0
   (cd "$out" && "$@" >/dev/null 2>stderr.txt) || rc=$?
@@ -171,6 +174,11 @@ hashes_of() {
   rm -rf "$work"
 }
 
+if [ "${1:-}" = --build ]; then
+  # For other scripts (bench-ab.sh): only build; print the binaries' folder.
+  build "${2:?usage: scripts/image-hashes.sh --build COMMIT}"
+  exit
+fi
 case $# in
   0 | 1) hashes_of "${1:-HEAD}" ;;
   2)
