@@ -138,15 +138,21 @@ render_all() {
       read -ra a <<<"$line"
       [ "${#a[@]}" -gt 1 ] || continue
       a=("${a[@]:1}")
+      # -gui starts the browser view (and, without -output, waits in it):
+      # the lines are rendered without it.
+      for i in "${!a[@]}"; do
+        [ "${a[$i]}" = -gui ] && unset 'a[i]'
+      done
+      a=("${a[@]}")
       for i in "${!a[@]}"; do
         [ "${a[$i]}" = -input ] && a[$((i + 1))]=$course/${a[$((i + 1))]}
       done
       local id
       id=$(basename "$cmd" _cmd.txt)-$(printf %02d "$k")
-      run_into "$out/course/$id" "$bin/raytracer" "${a[@]}" -stats_json stats.json -quiet
+      run_into "$out/course/$id" "$bin/raytracer" "${a[@]}" -stats_json stats.json -quiet </dev/null
       if ! grep -qE -- '-[a-z_]+_(samples|filter)|-adaptive' <<<"$line"; then
         run_into "$out/course/$id-spp16" "$bin/raytracer" "${a[@]}" -jittered_samples 16 \
-          -stats_json stats.json -quiet
+          -stats_json stats.json -quiet </dev/null
       fi
     done <"$cmd"
   done
