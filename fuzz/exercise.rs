@@ -5,7 +5,7 @@
 
 use glint::format::{obj::load_obj_from_bytes, parse_scene};
 use glint::integrator::{AoSettings, NoObserver, RayKind, Whitted};
-use glint::job::Job;
+use glint::job::{Job, Output};
 use glint::limits;
 use glint::math::{Vec2, Vec3};
 use glint::render::{screen_point, CameraModel};
@@ -81,9 +81,9 @@ pub fn job_args(data: &[u8]) {
         let step: Result<(), String> = (|| {
             match flag {
                 "-input" => job.input = value().into(),
-                "-output" => job.output = Some(value().into()),
-                "-normals" => job.normals = Some(value().into()),
-                "-stats_json" => job.stats_json = Some(value().into()),
+                "-output" => job.set_output(Output::Colour(value().into())),
+                "-normals" => job.set_output(Output::Normals(value().into())),
+                "-stats_json" => job.set_output(Output::Stats(value().into())),
                 "-size" => {
                     job.width = limits::parse_flag(flag, value())?;
                     job.height = limits::parse_flag(flag, value())?;
@@ -91,15 +91,19 @@ pub fn job_args(data: &[u8]) {
                 "-depth" => {
                     let t0 = limits::parse_finite(flag, value(), f32::MIN, f32::MAX)?;
                     let t1 = limits::parse_finite(flag, value(), f32::MIN, f32::MAX)?;
-                    job.depth = Some((t0, t1, value().into()));
+                    let path = value().into();
+                    job.set_output(Output::Depth {
+                        near: t0,
+                        far: t1,
+                        path,
+                    });
                 }
                 "-weight" => {
-                    job.integrator.weight_cutoff =
-                        limits::parse_finite(flag, value(), 0.0, f32::MAX)?
+                    job.shading.weight_cutoff = limits::parse_finite(flag, value(), 0.0, f32::MAX)?
                 }
                 "-bounces" => {
                     let n = limits::parse_flag(flag, value())?;
-                    job.integrator.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
+                    job.shading.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
                 }
                 "-threads" => {
                     let n = limits::parse_flag(flag, value())?;
@@ -107,9 +111,9 @@ pub fn job_args(data: &[u8]) {
                 }
                 // Unchecked values, as a library caller could set them: the
                 // job's own checks must catch them.
-                "-raw_weight" => job.integrator.weight_cutoff = value().parse().unwrap_or(f32::NAN),
+                "-raw_weight" => job.shading.weight_cutoff = value().parse().unwrap_or(f32::NAN),
                 "-raw_threads" => job.threads = value().parse().ok(),
-                "-raw_bounces" => job.integrator.bounces = value().parse().unwrap_or(u32::MAX),
+                "-raw_bounces" => job.shading.bounces = value().parse().unwrap_or(u32::MAX),
                 _ => {}
             }
             Ok(())
@@ -129,10 +133,10 @@ pub fn job_args(data: &[u8]) {
             assert!(job
                 .threads
                 .is_none_or(|n| (1..=limits::MAX_THREADS).contains(&n)));
-            assert!(job.integrator.bounces <= limits::MAX_BOUNCES);
-            let w = job.integrator.weight_cutoff;
+            assert!(job.shading.bounces <= limits::MAX_BOUNCES);
+            let w = job.shading.weight_cutoff;
             assert!(w.is_finite() && w >= 0.0);
-            let outs = job.outputs();
+            let outs = job.files();
             for (i, (_, a)) in outs.iter().enumerate() {
                 assert!(
                     !glint::output::same_file(a, &job.input),

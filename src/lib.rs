@@ -1,6 +1,8 @@
 //! glint: a teaching-grade, production-fast CPU ray tracer.
 pub mod accel;
 pub mod animation;
+#[cfg(feature = "cli")]
+pub mod app;
 pub mod bsdf;
 pub mod format;
 pub mod integrator;

@@ -224,10 +224,10 @@ fn renders_finite(names: Vec<std::path::PathBuf>) {
     use glint::job::Job;
     for path in names {
         let mut job = Job::new(path.clone(), 24, 24);
-        job.integrator.shadows = true;
-        job.integrator.shade_back = true;
-        job.integrator.bounces = 3;
-        job.integrator.weight_cutoff = 0.01;
+        job.shading.shadows = true;
+        job.shading.shade_back = true;
+        job.shading.bounces = 3;
+        job.shading.weight_cutoff = 0.01;
         let report = job
             .run()
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));

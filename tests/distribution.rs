@@ -953,8 +953,9 @@ fn ray_counts_follow_the_cost_formula() {
     let path = count_scene_path();
     let (w, h) = (8u32, 6u32);
     let mut job = Job::new(path.clone(), w, h);
-    job.integrator.shadows = true;
-    job.sampler = Some(Sampler::new(SamplerKind::Sobol, 4, 0));
+    job.shading.shadows = true;
+    job.sampling.spp = 4;
+    job.sampling.sampler = Some(SamplerKind::Sobol);
     let c = job.run().unwrap().counters;
     let camera = u64::from(w * h) * 4 * 2 * 5;
     assert_eq!(c.primary, camera);
@@ -962,7 +963,7 @@ fn ray_counts_follow_the_cost_formula() {
     assert_eq!(c.occlusion, camera * 7);
     assert_eq!(c.rays_total(), camera * (1 + 3 + 7));
 
-    job.effect_samples = SampleOverrides {
+    job.sampling.effects = SampleOverrides {
         shadow: Some(2),
         time: Some(3),
         lens: Some(1),
@@ -976,7 +977,7 @@ fn ray_counts_follow_the_cost_formula() {
     assert_eq!(c.occlusion, camera * 4);
 
     // The AO image: one AO probe set per camera ray, no shadow rays.
-    job.ao_image = true;
+    job.integrator = glint::integrator::IntegratorKind::Ao;
     let r = job.run().unwrap();
     assert_eq!(r.counters.shadow, 0);
     assert_eq!(r.counters.occlusion, camera * 4);

@@ -728,9 +728,15 @@ fn sampling_extremes_are_refused_up_front() {
         "100",
     ];
     for (extra, needle) in [
-        (&["-random_samples", "4000000000"][..], "samples per pixel"),
-        (&["-jittered_samples", "5000"][..], "samples per pixel"),
-        (&["-adaptive", "inf"][..], "adaptive threshold"),
+        (
+            &["-random_samples", "4000000000"][..],
+            "-random_samples: 4000000000 is out of range (1 to 4096)",
+        ),
+        (
+            &["-jittered_samples", "5000"][..],
+            "-jittered_samples: 5000 is out of range",
+        ),
+        (&["-adaptive", "inf"][..], "-adaptive: inf is out of range"),
         (&["-render_samples", "v.png", "1000"][..], "GiB of memory"),
         (
             &["-size", "100", "1", "-render_filter", "v.tga", "700"][..],

@@ -644,9 +644,9 @@ fn exponent_notation_is_accepted() {
 #[test]
 fn degenerate_triangles_render_with_finite_pixels() {
     let mut job = glint::job::Job::new(accepted("degenerate_triangles.txt"), 32, 32);
-    job.integrator.shadows = true;
-    job.integrator.shade_back = true;
-    job.integrator.bounces = 3;
+    job.shading.shadows = true;
+    job.shading.shade_back = true;
+    job.shading.bounces = 3;
     job.threads = Some(1);
     let report = job.run().unwrap();
     let f = &report.frame;

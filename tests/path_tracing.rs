@@ -6,10 +6,10 @@
 //! across threads.
 
 use crate::common::*;
-use glint::integrator::{PathSettings, Strategy};
+use glint::integrator::{IntegratorKind, PathSettings, Strategy};
 use glint::job::Job;
 use glint::math::Vec3;
-use glint::sampler::{Sampler, SamplerKind};
+use glint::sampler::SamplerKind;
 use std::path::{Path, PathBuf};
 
 /// A path-traced render of `scene`: its pixels, row 0 at the top.
@@ -34,8 +34,11 @@ fn render_seeded(
     seed: u64,
 ) -> Vec<Vec3> {
     let mut job = Job::new(scene.to_path_buf(), size, size);
-    job.sampler = Some(Sampler::new(kind, spp, seed));
-    job.path = Some(settings);
+    job.sampling.spp = spp;
+    job.sampling.sampler = Some(kind);
+    job.sampling.seed = seed;
+    job.shading.bounces = settings.max_bounces;
+    job.integrator = IntegratorKind::Path(settings);
     job.threads = Some(threads);
     let report = job
         .run()

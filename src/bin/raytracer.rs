@@ -2,11 +2,13 @@
 //! `raytracer -input scene.txt -size 200 200 -output out.tga -shadows -bounces 3 -weight 0.01`.
 
 use glint::accel::AccelKind;
-use glint::job::Job;
+use glint::app;
+use glint::integrator::IntegratorKind;
+use glint::job::{FlagNames, Job, Output};
 use glint::limits;
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, PixelOffset};
-use glint::sampler::{GridLayout, Sampler, SamplerKind};
+use glint::render::{Filter, PixelOffset};
+use glint::sampler::{GridLayout, SamplerKind};
 use glint::viz::grid::GridView;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -18,7 +20,7 @@ use std::process::ExitCode;
 mod serve;
 
 fn main() -> ExitCode {
-    glint::job::run_guarded("raytracer", real_main)
+    app::run_guarded("raytracer", real_main)
 }
 
 /// Every flag, its arguments and one line of help, in the order `-help` prints them.
@@ -157,7 +159,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "T",
         "Whitted's adaptive corner subdivision, threshold T",
     ),
-    ("-max_depth", "D", "deepest subdivision of -adaptive"),
+    ("-max_depth", "D", "deepest subdivision of -adaptive, 0 to 8 (default 2)"),
     (
         "-samples_image",
         "FILE",
@@ -170,8 +172,8 @@ const FLAGS: &[(&str, &str, &str)] = &[
     ),
     (
         "-integrator",
-        "whitted|path",
-        "whitted (the course's ray tree, default) or path (path tracing with light sampling and MIS; -bounces then limits the scattering events per path, default 64)",
+        "NAME",
+        "what to compute: whitted (the shaded image, the default), ao (the grey ambient-occlusion image) or path (path tracing with light sampling and MIS; -bounces then limits the scattering events per path, default 64)",
     ),
     ("-help", "", "print this help (also -h, --help)"),
 ];
@@ -189,6 +191,9 @@ fn help() -> String {
         let lhs = format!("{flag} {args}");
         s.push_str(&format!("  {lhs:<30}{text}\n"));
     }
+    s.push('\n');
+    s.push_str(app::EXIT_STATUS_HELP);
+    s.push('\n');
     s
 }
 
@@ -201,149 +206,97 @@ fn real_main() -> ExitCode {
         print!("{}", help());
         return ExitCode::SUCCESS;
     }
-    let (mut job, stats) = match parse(&args) {
+    let (job, stats, quiet) = match parse(&args) {
         Ok(j) => j,
-        Err(msg) => {
-            eprintln!("raytracer: {}", limits::bounded_message(&msg));
-            return ExitCode::from(2);
-        }
+        Err(msg) => return app::exit("raytracer", Err(app::usage(msg))),
     };
     // `-gui` without `-output`: the browser view alone. With `-output` (every
     // handout line), the image is rendered first, as the course's program
     // did, and the view follows only for a person at a terminal, so that
     // scripts running the handouts' lines verbatim still end.
     let gui_asked = args.iter().any(|a| a == "-gui");
-    if gui_asked && job.output.is_none() {
-        return gui(&job);
+    if gui_asked && job.colour().is_none() {
+        return app::exit("raytracer", gui(&job));
     }
     let interactive = std::io::stdin().is_terminal();
     if gui_asked && !interactive {
         eprintln!(
             "raytracer: -gui: rendering {} only (the browser view starts from a terminal, or without -output)",
-            job.output.as_deref().unwrap_or(std::path::Path::new("")).display()
+            job.colour().unwrap_or(std::path::Path::new("")).display()
         );
     }
-    if !(gui_asked && interactive) {
-        // The server installs its own Ctrl-C handling.
-        job.cancel = Some(glint::job::interrupt_flag());
-    }
-    match job.run() {
-        Ok(report) => {
-            if stats {
-                print!("{}", glint::job::course_stats_text(&report));
-            }
-            if gui_asked && interactive {
-                return gui(&job);
-            }
-            ExitCode::SUCCESS
+    let report = if gui_asked && interactive {
+        // No Ctrl-C handler and no progress bar: the server installs its
+        // own Ctrl-C handling.
+        job.run()
+    } else {
+        app::run_job("raytracer", &job, FlagNames::Course, quiet)
+    };
+    let result = report.map(|report| {
+        if stats {
+            print!("{}", glint::job::course_stats_text(&report));
         }
-        Err(e) => {
-            eprintln!("raytracer: {}", limits::bounded_message(&e.to_string()));
-            ExitCode::from(e.exit_code() as u8)
-        }
+    });
+    if result.is_ok() && gui_asked && interactive {
+        return app::exit("raytracer", gui(&job));
     }
+    app::exit("raytracer", result)
 }
 
 /// `-gui`: the course's OpenGL preview becomes `glint serve`'s page, with
 /// the command line's size, bounces, weight, shadows and accelerator.
-fn gui(job: &Job) -> ExitCode {
+fn gui(job: &Job) -> Result<(), glint::job::JobError> {
     let defaults = serve::params::Defaults {
         size: (job.width, job.height),
-        bounces: job.integrator.bounces,
-        weight: job.integrator.weight_cutoff,
-        shadows: job.integrator.shadows,
-        shade_back: job.integrator.shade_back,
-        spp: job.sampler.map_or(64, |s| s.spp()),
+        bounces: job.shading.bounces,
+        weight: job.shading.weight_cutoff,
+        shadows: job.shading.shadows,
+        shade_back: job.shading.shade_back,
+        spp: job.sampling.sampler().map_or(64, |s| s.spp()),
         accel: job.build.accel.to_string(),
     };
-    match serve::serve(&job.input, None, None, defaults, "raytracer") {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
-            eprintln!("raytracer: {}", limits::bounded_message(&msg));
-            ExitCode::from(2)
-        }
-    }
+    serve::serve(&job.input, None, None, defaults, "raytracer").map_err(app::usage)
 }
 
 /// Flags of the course's OpenGL preview: accepted so the handouts' lines run.
 const PREVIEW_ONLY: &[(&str, usize)] = &[("-gui", 0), ("-tessellation", 2), ("-gouraud", 0)];
 
-fn parse(args: &[String]) -> Result<(Job, bool), String> {
+/// The job a command line asks for, whether it asks for the statistics
+/// report, and whether it asks for no progress bar. Every number is checked
+/// by [`Job::validate`], named by its flag.
+fn parse(args: &[String]) -> Result<(Job, bool, bool), String> {
     let mut it = args.iter();
     let mut job = Job::new(PathBuf::new(), 100, 100);
-    job.pixel_offset = PixelOffset::CORNER;
+    job.sampling.pixel_offset = PixelOffset::CORNER;
     let mut input = None;
     let mut stats = false;
     let mut ignored = Vec::new();
     let mut quiet = false;
     let mut grid = None;
     let mut accel = None;
-    let mut sampling: Option<(SamplerKind, u32)> = None;
-    let mut seed = 0u64;
-    let mut max_depth = Adaptive::DEFAULT_MAX_DEPTH;
-    let mut path = false;
-    let mut bounces_given = false;
     while let Some(flag) = it.next() {
         let mut value = |what: &str| -> Result<&String, String> {
             it.next().ok_or_else(|| format!("{flag} expects {what}"))
         };
+        if output_flag(&mut job, flag, &mut value)?
+            || sampling_flag(&mut job, flag, &mut value)?
+            || shading_flag(&mut job, flag, &mut value)?
+        {
+            continue;
+        }
         match flag.as_str() {
             "-input" => input = Some(PathBuf::from(value("a scene file")?)),
-            "-output" => job.output = Some(PathBuf::from(value("an image file")?)),
             "-size" => {
                 job.width = number(flag, value("a width")?)?;
                 job.height = number(flag, value("a height")?)?;
             }
-            "-depth" => {
-                let t0 = limits::parse_finite(flag, value("t0 t1 file")?, f32::MIN, f32::MAX)?;
-                let t1 = limits::parse_finite(flag, value("t1 file")?, f32::MIN, f32::MAX)?;
-                job.depth = Some((t0, t1, PathBuf::from(value("a file")?)));
-            }
-            "-normals" => job.normals = Some(PathBuf::from(value("an image file")?)),
-            "-shade_back" => job.integrator.shade_back = true,
-            "-shadows" => job.integrator.shadows = true,
-            "-transparent_shadows" => job.integrator.transparent_shadows = true,
-            "-bounces" => {
-                let n = number(flag, value("a count")?)?;
-                job.integrator.bounces = limits::int_in(flag, n, 0, limits::MAX_BOUNCES)?;
-                bounces_given = true;
-            }
-            "-integrator" => {
-                path = match value("whitted or path")?.as_str() {
-                    "whitted" => false,
-                    "path" => true,
-                    other => {
-                        return Err(format!(
-                            "-integrator: expected whitted or path, found {}",
-                            limits::shorten(other)
-                        ))
-                    }
-                };
-            }
-            "-weight" => {
-                job.integrator.weight_cutoff =
-                    limits::parse_finite(flag, value("a weight")?, 0.0, f32::MAX)?;
-            }
             "-stats" => stats = true,
-            "-threads" => {
-                let n = number(flag, value("a count")?)?;
-                let (n, note) = limits::threads(flag, n, limits::cores())?;
-                if let Some(note) = note {
-                    eprintln!("raytracer: {note}");
-                }
-                job.threads = Some(n);
-            }
+            "-threads" => job.threads = Some(number(flag, value("a count")?)?),
             "-quiet" => quiet = true,
             "-grid" => {
                 let mut res = [0u32; 3];
                 for r in &mut res {
                     *r = number(flag, value("nx ny nz")?)?;
-                }
-                if res.contains(&0) {
-                    return Err(format!(
-                        "-grid {} {} {}: every resolution must be at least 1",
-                        res[0], res[1], res[2]
-                    ));
                 }
                 grid = Some(res);
             }
@@ -357,71 +310,6 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
             "-no_flatten" => job.build.flatten = false,
             "-visualize_grid" => job.visualize_grid = Some(GridView::Occupied),
             "-visualize_grid_count" => job.visualize_grid = Some(GridView::Count),
-            "-texture_space" => {
-                job.integrator.texture_space = match value("world or object")?.as_str() {
-                    "world" => TextureSpace::World,
-                    "object" => TextureSpace::Object,
-                    other => {
-                        return Err(format!(
-                            "-texture_space: expected world or object, found {}",
-                            limits::shorten(other)
-                        ))
-                    }
-                }
-            }
-            "-stats_json" => job.stats_json = Some(PathBuf::from(value("a file")?)),
-            // Sampling (assignment 7). The course's uniform grid is the
-            // reference renders' `(a+1)/(k+1)` layout; see GridLayout::Inset.
-            "-uniform_samples" | "-random_samples" | "-jittered_samples" | "-sobol_samples" => {
-                let n: u32 = number(flag, value("a sample count")?)?;
-                if n == 0 {
-                    return Err(format!("{flag}: the sample count must be at least 1"));
-                }
-                let kind = match flag.as_str() {
-                    "-uniform_samples" => SamplerKind::Uniform(GridLayout::Inset),
-                    "-random_samples" => SamplerKind::Random,
-                    "-jittered_samples" => SamplerKind::Jittered,
-                    _ => SamplerKind::Sobol,
-                };
-                sampling = Some((kind, n));
-            }
-            "-seed" => seed = number(flag, value("a seed")?)?,
-            "-box_filter" | "-tent_filter" | "-gaussian_filter" => {
-                let v: f32 = number(flag, value("a radius")?)?;
-                let f = match flag.as_str() {
-                    "-box_filter" => Filter::Box(v),
-                    "-tent_filter" => Filter::Tent(v),
-                    // The course implementations' square kernel (render/filter.rs).
-                    _ => Filter::GaussianSquare(v),
-                };
-                f.validate().map_err(|e| format!("{flag}: {e}"))?;
-                job.filter = f;
-            }
-            "-render_samples" | "-render_filter" => {
-                let file = PathBuf::from(value("a file and a zoom")?);
-                let zoom: u32 = number(flag, value("a zoom")?)?;
-                if zoom == 0 || zoom > 1000 {
-                    return Err(format!("{flag}: zoom {zoom} must be between 1 and 1000"));
-                }
-                if flag == "-render_samples" {
-                    job.samples_view = Some((file, zoom));
-                } else {
-                    job.filter_view = Some((file, zoom));
-                }
-            }
-            "-adaptive" => {
-                let t: f32 = number(flag, value("a threshold")?)?;
-                if t.is_nan() || t < 0.0 {
-                    return Err(format!("-adaptive {t}: the threshold must be at least 0"));
-                }
-                job.adaptive = Some(Adaptive {
-                    threshold: t,
-                    max_depth: 0,
-                });
-            }
-            "-max_depth" => max_depth = number(flag, value("a depth")?)?,
-            "-samples_image" => job.samples_image = Some(PathBuf::from(value("a file")?)),
-            "-cost_image" => job.cost_image = Some(PathBuf::from(value("a file")?)),
             other => match PREVIEW_ONLY.iter().find(|(f, _)| *f == other) {
                 Some((f, n)) => {
                     for _ in 0..*n {
@@ -456,32 +344,111 @@ fn parse(args: &[String]) -> Result<(Job, bool), String> {
         (Some(kind), _) => kind,
         (None, None) => AccelKind::default(),
     };
-    if max_depth > Adaptive::MAX_DEPTH {
-        return Err(format!(
-            "-max_depth {max_depth}: at most {} (a {}x{} lattice per pixel)",
-            Adaptive::MAX_DEPTH,
-            1 << Adaptive::MAX_DEPTH,
-            1 << Adaptive::MAX_DEPTH
-        ));
-    }
-    if let Some(a) = &mut job.adaptive {
-        a.max_depth = max_depth;
-    }
-    job.sampler = sampling.map(|(kind, n)| Sampler::new(kind, n, seed));
-    if path {
-        let defaults = glint::integrator::PathSettings::default();
-        job.path = Some(glint::integrator::PathSettings {
-            max_bounces: if bounces_given {
-                job.integrator.bounces
-            } else {
-                defaults.max_bounces
-            },
-            ..defaults
-        });
+    if let IntegratorKind::Path(p) = &mut job.integrator {
+        // The path tracer's own default depth unless -bounces names one.
+        if !args.iter().any(|a| a == "-bounces") {
+            job.shading.bounces = p.max_bounces;
+        }
+        p.max_bounces = job.shading.bounces;
     }
     job.input = input.ok_or("missing -input SCENE")?;
-    job.progress = !quiet && std::io::stdout().is_terminal();
-    Ok((job, stats))
+    job.validate(FlagNames::Course).map_err(|e| e.to_string())?;
+    Ok((job, stats, quiet))
+}
+
+/// The next argument, or an error saying what the flag expects.
+type Value<'v, 'a> = &'v mut dyn FnMut(&str) -> Result<&'a String, String>;
+
+/// An output flag: sets `job`'s output; false if `flag` is none.
+fn output_flag(job: &mut Job, flag: &str, value: Value) -> Result<bool, String> {
+    match flag {
+        "-output" => job.set_output(Output::Colour(value("an image file")?.into())),
+        "-depth" => {
+            let near = number(flag, value("t0 t1 file")?)?;
+            let far = number(flag, value("t1 file")?)?;
+            let path = value("a file")?.into();
+            job.set_output(Output::Depth { near, far, path });
+        }
+        "-normals" => job.set_output(Output::Normals(value("an image file")?.into())),
+        "-stats_json" => job.set_output(Output::Stats(value("a file")?.into())),
+        "-render_samples" | "-render_filter" => {
+            let path = PathBuf::from(value("a file and a zoom")?);
+            let zoom = number(flag, value("a zoom")?)?;
+            job.set_output(if flag == "-render_samples" {
+                Output::SamplesView { path, zoom }
+            } else {
+                Output::FilterView { path, zoom }
+            });
+        }
+        "-samples_image" => job.set_output(Output::SamplesHeatMap(value("a file")?.into())),
+        "-cost_image" => job.set_output(Output::Cost(value("a file")?.into())),
+        _ => return Ok(false),
+    }
+    Ok(true)
+}
+
+/// A flag of what is computed and how it is shaded: sets `job`'s
+/// integrator or shading; false if `flag` is none.
+fn shading_flag(job: &mut Job, flag: &str, value: Value) -> Result<bool, String> {
+    match flag {
+        "-shade_back" => job.shading.shade_back = true,
+        "-shadows" => job.shading.shadows = true,
+        "-transparent_shadows" => job.shading.transparent_shadows = true,
+        "-bounces" => job.shading.bounces = number(flag, value("a count")?)?,
+        "-weight" => job.shading.weight_cutoff = number(flag, value("a weight")?)?,
+        "-texture_space" => {
+            job.shading.texture_space = match value("world or object")?.as_str() {
+                "world" => TextureSpace::World,
+                "object" => TextureSpace::Object,
+                other => {
+                    return Err(format!(
+                        "-texture_space: expected world or object, found {}",
+                        limits::shorten(other)
+                    ))
+                }
+            }
+        }
+        "-integrator" => {
+            job.integrator = value("an integrator name (see -help)")?
+                .parse::<IntegratorKind>()
+                .map_err(|e| format!("{flag}: {e}"))?;
+        }
+        _ => return Ok(false),
+    }
+    Ok(true)
+}
+
+/// A sampling flag (assignment 7's, and glint's additions): sets `job`'s
+/// sampling; false if `flag` is none.
+fn sampling_flag(job: &mut Job, flag: &str, value: Value) -> Result<bool, String> {
+    match flag {
+        // Sampling (assignment 7). The course's uniform grid is the
+        // reference renders' `(a+1)/(k+1)` layout; see GridLayout::Inset.
+        "-uniform_samples" | "-random_samples" | "-jittered_samples" | "-sobol_samples" => {
+            job.sampling.spp = number(flag, value("a sample count")?)?;
+            let kind = match flag {
+                "-uniform_samples" => SamplerKind::Uniform(GridLayout::Inset),
+                "-random_samples" => SamplerKind::Random,
+                "-jittered_samples" => SamplerKind::Jittered,
+                _ => SamplerKind::Sobol,
+            };
+            job.sampling.sampler = Some(kind);
+        }
+        "-seed" => job.sampling.seed = number(flag, value("a seed")?)?,
+        "-box_filter" | "-tent_filter" | "-gaussian_filter" => {
+            let v: f32 = number(flag, value("a radius")?)?;
+            job.sampling.filter = match flag {
+                "-box_filter" => Filter::Box(v),
+                "-tent_filter" => Filter::Tent(v),
+                // The course implementations' square kernel (render/filter.rs).
+                _ => Filter::GaussianSquare(v),
+            };
+        }
+        "-adaptive" => job.sampling.adaptive = Some(number(flag, value("a threshold")?)?),
+        "-max_depth" => job.sampling.max_depth = number(flag, value("a depth")?)?,
+        _ => return Ok(false),
+    }
+    Ok(true)
 }
 
 /// A flag's number; the message quotes a bounded part of a bad value.
@@ -499,28 +466,30 @@ mod tests {
 
     #[test]
     fn handout_line_parses() {
-        let (j, _) = parse(&args(
+        let (j, _, _) = parse(&args(
             "-input scene4_14_faceted_gem.txt -size 200 100 -output out.tga -shadows -shade_back -bounces 3 -weight 0.01 -gui -tessellation 10 5",
         ))
         .unwrap();
         assert_eq!((j.width, j.height), (200, 100));
-        assert!(j.integrator.shadows && j.integrator.shade_back);
-        assert_eq!(j.integrator.bounces, 3);
-        assert_eq!(j.integrator.weight_cutoff, 0.01);
+        assert!(j.shading.shadows && j.shading.shade_back);
+        assert_eq!(j.shading.bounces, 3);
+        assert_eq!(j.shading.weight_cutoff, 0.01);
+        assert_eq!(j.integrator, IntegratorKind::Whitted);
+        assert_eq!(j.colour(), Some(std::path::Path::new("out.tga")));
     }
 
     #[test]
     fn grid_and_accel_flags() {
-        let (j, _) = parse(&args("-input a.txt -grid 10 10 7")).unwrap();
+        let (j, _, _) = parse(&args("-input a.txt -grid 10 10 7")).unwrap();
         assert_eq!(
             j.build.accel,
             AccelKind::Grid {
                 res: Some([10, 10, 7])
             }
         );
-        let (j, _) = parse(&args("-input a.txt -grid 10 10 7 -accel octree")).unwrap();
+        let (j, _, _) = parse(&args("-input a.txt -grid 10 10 7 -accel octree")).unwrap();
         assert_eq!(j.build.accel, AccelKind::Octree);
-        let (j, _) = parse(&args("-input a.txt")).unwrap();
+        let (j, _, _) = parse(&args("-input a.txt")).unwrap();
         assert_eq!(j.build.accel, AccelKind::default());
         assert!(parse(&args("-input a.txt -accel kdtree"))
             .unwrap_err()
@@ -576,26 +545,32 @@ mod tests {
 
     #[test]
     fn sampling_flags() {
-        let (j, _) = parse(&args("-input a.txt")).unwrap();
-        assert_eq!(j.sampler, None);
-        assert_eq!(j.filter, Filter::Box(0.5));
-        let (j, _) = parse(&args(
+        let (j, _, _) = parse(&args("-input a.txt")).unwrap();
+        assert_eq!(j.sampling.sampler(), None);
+        assert_eq!(j.sampling.filter, Filter::Box(0.5));
+        let (j, _, _) = parse(&args(
             "-input a.txt -jittered_samples 9 -gaussian_filter 0.4 -render_samples s.tga 20",
         ))
         .unwrap();
-        let s = j.sampler.unwrap();
+        let s = j.sampling.sampler().unwrap();
         assert_eq!((s.kind, s.spp()), (SamplerKind::Jittered, 9));
-        assert_eq!(j.filter, Filter::GaussianSquare(0.4));
-        assert_eq!(j.samples_view, Some((PathBuf::from("s.tga"), 20)));
-        let (j, _) = parse(&args("-input a.txt -uniform_samples 4")).unwrap();
+        assert_eq!(j.sampling.filter, Filter::GaussianSquare(0.4));
         assert_eq!(
-            j.sampler.unwrap().kind,
+            j.outputs,
+            [Output::SamplesView {
+                path: "s.tga".into(),
+                zoom: 20
+            }]
+        );
+        let (j, _, _) = parse(&args("-input a.txt -uniform_samples 4")).unwrap();
+        assert_eq!(
+            j.sampling.sampler().unwrap().kind,
             SamplerKind::Uniform(GridLayout::Inset)
         );
-        let (j, _) = parse(&args("-input a.txt -adaptive 0.1 -max_depth 3")).unwrap();
+        let (j, _, _) = parse(&args("-input a.txt -adaptive 0.1 -max_depth 3")).unwrap();
         assert_eq!(
-            j.adaptive,
-            Some(Adaptive {
+            j.sampling.adaptive(),
+            Some(glint::render::Adaptive {
                 threshold: 0.1,
                 max_depth: 3
             })
@@ -604,6 +579,36 @@ mod tests {
         assert!(parse(&args("-input a.txt -random_samples 0")).is_err());
         assert!(parse(&args("-input a.txt -render_filter f.tga 0")).is_err());
         assert!(parse(&args("-input a.txt -adaptive 0.1 -max_depth 9")).is_err());
+    }
+
+    #[test]
+    fn integrator_flag() {
+        for kind in IntegratorKind::all() {
+            let (j, _, _) = parse(&args(&format!("-input a.txt -integrator {kind}"))).unwrap();
+            assert_eq!(j.integrator, kind);
+        }
+        let e = parse(&args("-input a.txt -integrator paths")).unwrap_err();
+        assert!(
+            e.starts_with("-integrator: unknown integrator 'paths'"),
+            "{e}"
+        );
+        let bounces = |line: &str| match parse(&args(line)).unwrap().0.integrator {
+            IntegratorKind::Path(p) => p.max_bounces,
+            k => panic!("{k}"),
+        };
+        assert_eq!(bounces("-input a.txt -integrator path"), 64);
+        assert_eq!(bounces("-input a.txt -bounces 3 -integrator path"), 3);
+        let line = help();
+        let line = line
+            .lines()
+            .find(|l| l.trim_start().starts_with("-integrator"))
+            .unwrap();
+        for name in IntegratorKind::NAMES {
+            assert!(
+                line.contains(name),
+                "{name} is not in -help's -integrator line"
+            );
+        }
     }
 
     #[test]
@@ -630,8 +635,8 @@ mod tests {
             let e = parse(&args(&format!("-input a.txt {line}"))).unwrap_err();
             assert!(e.starts_with(&format!("{flag}: ")), "{line}: {e}");
         }
-        let (j, _) = parse(&args("-input a.txt -threads 1000")).unwrap();
-        assert!(j.threads.unwrap() <= 4 * limits::cores());
+        let (j, _, _) = parse(&args("-input a.txt -threads 1000")).unwrap();
+        assert!(j.pool_threads() <= 4 * limits::cores());
         let e = parse(&args(&format!(
             "-input a.txt -size {} 1",
             "9".repeat(100_000)

@@ -4,12 +4,14 @@
 //! (ambient occlusion, path tracing) plug in without touching the loop.
 
 pub mod ao;
+mod kind;
 mod observer;
 pub mod optics;
 pub mod path;
 mod whitted;
 
 pub use ao::{AmbientOcclusion, AoSettings};
+pub use kind::IntegratorKind;
 pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
 pub use path::{PathSettings, PathTracer, Strategy};
 pub use whitted::Whitted;

@@ -2,8 +2,9 @@
 //! wrote into the whole frame, exactly as one machine would have rendered it.
 
 use clap::Args;
+use glint::app;
+use glint::job::JobError;
 use std::path::PathBuf;
-use std::process::ExitCode;
 
 /// Arguments of `glint merge`.
 #[derive(Args)]
@@ -21,49 +22,35 @@ pub struct MergeArgs {
 
 /// Runs `glint merge`: exit 2, writing nothing, when the pieces do not make
 /// exactly one frame.
-pub fn run(a: MergeArgs) -> ExitCode {
-    let fail = |code: u8, msg: String| {
-        eprintln!("glint merge: {}", glint::limits::bounded_message(&msg));
-        ExitCode::from(code)
-    };
-    if let Err(e) = glint::output::check_path(&a.output) {
-        return fail(2, e.to_string());
-    }
+pub fn run(a: MergeArgs) -> Result<(), JobError> {
+    glint::output::check_path(&a.output)?;
     // Issue 15: no output may be a piece, or the other output.
     let mut outputs = vec![&a.output];
     outputs.extend(&a.stats_json);
     for out in &outputs {
-        let checked = glint::output::check_writable(out)
-            .and_then(|()| glint::output::check_not_input(out, &a.pieces));
-        if let Err(e) = checked {
-            return fail(2, e.to_string());
-        }
+        glint::output::check_writable(out)?;
+        glint::output::check_not_input(out, &a.pieces)?;
     }
     if let Some(json) = &a.stats_json {
         if glint::output::same_file(json, &a.output) {
             let msg = "the merged image and the statistics file are the same file";
-            return fail(2, format!("{}: {msg}; choose two names", json.display()));
+            return Err(app::usage(format!(
+                "{}: {msg}; choose two names",
+                json.display()
+            )));
         }
     }
-    let mut pieces = Vec::new();
-    for p in &a.pieces {
-        match glint::piece::read(p) {
-            Ok(piece) => pieces.push(piece),
-            Err(e) => return fail(2, e),
-        }
-    }
-    let ((w, h), pixels, stats) = match glint::piece::merge(&pieces) {
-        Ok(m) => m,
-        Err(e) => return fail(2, e),
-    };
-    if let Err(e) = glint::output::write_rgb(&a.output, w, h, &pixels) {
-        return fail(1, e.to_string());
-    }
+    let pieces = a
+        .pieces
+        .iter()
+        .map(|p| glint::piece::read(p))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(app::usage)?;
+    let ((w, h), pixels, stats) = glint::piece::merge(&pieces).map_err(app::usage)?;
+    glint::output::write_rgb(&a.output, w, h, &pixels)?;
     if let Some(path) = &a.stats_json {
         let text = serde_json::to_string_pretty(&stats).unwrap_or_default();
-        if let Err(e) = glint::output::write_file(path, (text + "\n").as_bytes()) {
-            return fail(1, e.to_string());
-        }
+        glint::output::write_file(path, (text + "\n").as_bytes())?;
     }
     println!(
         "merged {} pieces into {} ({w}x{h}, settings {})",
@@ -71,5 +58,5 @@ pub fn run(a: MergeArgs) -> ExitCode {
         a.output.display(),
         pieces[0].hash
     );
-    ExitCode::SUCCESS
+    Ok(())
 }

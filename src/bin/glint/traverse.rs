@@ -1,89 +1,81 @@
 //! `glint traverse SCENE --pixel X Y -o FILE`: the cells, leaves or BVH boxes
 //! an accelerator's search looked at for the eye rays of some pixels.
 
+use crate::args::{ImageArgs, SceneArgs};
 use clap::Args;
-use glint::accel::AccelKind;
+use glint::app::usage;
 use glint::integrator::Whitted;
+use glint::job::JobError;
 use glint::render::{render, screen_point, CameraModel, PixelOffset};
 use glint::viz::draw::Canvas;
 use glint::viz::traversal::{self, Structure};
 use glint::world::{BuildOptions, World};
-use std::path::PathBuf;
-use std::process::ExitCode;
 
 /// Arguments of `glint traverse`.
 #[derive(Args)]
 pub struct TraverseArgs {
-    /// Scene file (MIT 6.837 format) or a bare .obj mesh.
-    scene: PathBuf,
+    // `--accel`: the structure whose search is recorded (grid, grid:NxNxN,
+    // nested-grid, octree, octree-inner, a bvh).
+    #[command(flatten)]
+    scene: SceneArgs,
     /// A pixel whose eye ray to follow: x from the left, y from the top; repeat for more.
     #[arg(long, num_args = 2, value_names = ["X", "Y"], action = clap::ArgAction::Append)]
     pixel: Vec<u32>,
     /// Follow the eye rays of every pixel of this row (from the top).
     #[arg(long, value_name = "Y")]
     row: Option<u32>,
-    /// Accelerator: grid, grid:NxNxN, octree, bvh, bvh-median, bvh-midpoint.
-    #[arg(long, default_value = "grid")]
-    accel: AccelKind,
-    /// Output: .png/.tga/.ppm/.bmp (over the rendered image), .obj (3-D segments), .json.
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Image size in pixels.
-    #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [400, 400])]
-    size: Vec<u32>,
+    // Output: .png/.tga/.ppm/.bmp (over the rendered image), .obj (3-D
+    // segments), .json.
+    #[command(flatten)]
+    image: ImageArgs,
 }
 
-/// Runs `glint traverse`.
-pub fn run(a: TraverseArgs) -> ExitCode {
-    match run_inner(a) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err((code, msg)) => {
-            eprintln!("glint: {}", glint::limits::bounded_message(&msg));
-            ExitCode::from(code)
-        }
-    }
-}
-
-fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
-    let (w, h) = (a.size[0], a.size[1]);
+/// The pixels `--pixel` and `--row` name, all inside the image.
+fn pixels(a: &TraverseArgs, (w, h): (u32, u32)) -> Result<Vec<(u32, u32)>, JobError> {
     if w == 0 || h == 0 {
-        return Err((
-            2,
-            format!("image size {w}x{h}: width and height must be at least 1"),
-        ));
+        return Err(usage(format!(
+            "image size {w}x{h}: width and height must be at least 1"
+        )));
     }
     let mut pixels: Vec<(u32, u32)> = a.pixel.chunks(2).map(|p| (p[0], p[1])).collect();
     if let Some(y) = a.row {
         pixels.extend((0..w).map(|x| (x, y)));
     }
     if pixels.is_empty() {
-        return Err((2, "give at least one --pixel X Y or a --row Y".into()));
+        return Err(usage("give at least one --pixel X Y or a --row Y"));
     }
     if let Some(&(x, y)) = pixels.iter().find(|(x, y)| *x >= w || *y >= h) {
-        return Err((2, format!("pixel ({x}, {y}) is outside the {w}x{h} image")));
+        return Err(usage(format!(
+            "pixel ({x}, {y}) is outside the {w}x{h} image"
+        )));
     }
-    let ext = a
-        .output
+    Ok(pixels)
+}
+
+/// Runs `glint traverse`.
+pub fn run(a: TraverseArgs) -> Result<(), JobError> {
+    let (w, h) = a.image.size();
+    let output = &a.image.output;
+    let accel = a.scene.accel;
+    let pixels = pixels(&a, (w, h))?;
+    let ext = output
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     if !matches!(ext.as_str(), "obj" | "json") {
-        glint::output::check_path(&a.output).map_err(|e| (2, format!("{e} (or .obj, .json)")))?;
+        glint::output::check_path(output).map_err(|e| usage(format!("{e} (or .obj, .json)")))?;
     }
     // Never overwrites the scene or a mesh it names (issue 15).
-    let scene = glint::job::load_scene_for(&a.scene, &a.output, (w, h))
-        .map_err(|e| (e.exit_code() as u8, e.to_string()))?;
+    let scene = glint::job::load_scene_for(&a.scene.scene, output, (w, h))?;
     // World space: the exported cells and boxes are in the scene's coordinates.
     let world = World::build_world_space(&scene, BuildOptions::default());
     let camera =
         CameraModel::of_world(&world, &scene.effects).at_time(scene.effects.lens.shutter[0]);
-    let structure = Structure::build(&world, a.accel).ok_or((
-        2,
-        format!(
-            "--accel {}: no walk to record; choose grid, nested-grid, octree, octree-inner, bvh, bvh-median, bvh-midpoint or bvh-hierarchy (bvh is the binary SAH BVH; the 8-wide bvh8 records no walk)",
-            a.accel
-        ),
-    ))?;
+    let structure = Structure::build(&world, accel).ok_or_else(|| {
+        usage(format!(
+            "--accel {accel}: no walk to record; choose grid, octree, octree-inner or a bvh"
+        ))
+    })?;
     let bvh = matches!(structure, Structure::Bvh(_));
     let mut segments = Vec::new();
     let mut json = Vec::new();
@@ -105,16 +97,14 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
             })).collect::<Vec<_>>(),
         }));
     }
-    let io = |e: glint::output::OutputError| (1, e.to_string());
     match ext.as_str() {
-        "obj" => glint::output::write_file(&a.output, traversal::to_obj(&segments).as_bytes())
-            .map_err(io)?,
+        "obj" => glint::output::write_file(output, traversal::to_obj(&segments).as_bytes())?,
         "json" => {
             let text = serde_json::to_string_pretty(
-                &serde_json::json!({ "accel": a.accel.to_string(), "rays": json }),
+                &serde_json::json!({ "accel": accel.to_string(), "rays": json }),
             )
-            .map_err(|e| (1, e.to_string()))?;
-            glint::output::write_file(&a.output, (text + "\n").as_bytes()).map_err(io)?;
+            .map_err(|e| JobError::Internal(e.to_string()))?;
+            glint::output::write_file(output, (text + "\n").as_bytes())?;
         }
         _ => {
             let shading = Whitted {
@@ -125,15 +115,21 @@ fn run_inner(a: TraverseArgs) -> Result<(), (u8, String)> {
             let mut canvas = Canvas::new(w, h, frame.color);
             canvas.dim(0.6);
             traversal::draw(&mut canvas, &camera, &segments);
-            glint::output::write_rgb(&a.output, w, h, &canvas.pixels)
-                .map_err(|e| (1, e.to_string()))?;
+            glint::output::write_rgb(output, w, h, &canvas.pixels)?;
         }
     }
     println!(
         "{} rays, {looked} boxes looked at ({}), written to {}",
         pixels.len(),
-        a.accel,
-        a.output.display()
+        accel,
+        output.display()
     );
     Ok(())
+}
+
+impl TraverseArgs {
+    #[cfg(test)]
+    pub fn accel(&self) -> glint::accel::AccelKind {
+        self.scene.accel
+    }
 }

@@ -26,7 +26,6 @@ use state::App;
 use std::io::Write as _;
 use std::net::{Ipv4Addr, SocketAddr};
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -75,8 +74,8 @@ pub struct ServeArgs {
     pub accel: String,
 }
 
-/// Runs `glint serve` until Ctrl-C.
-pub fn run(a: ServeArgs) -> ExitCode {
+/// Runs `glint serve` until Ctrl-C; a refused request is a usage error.
+pub fn run(a: ServeArgs) -> Result<(), glint::job::JobError> {
     let defaults = Defaults {
         size: (a.size[0], a.size[1]),
         bounces: a.bounces,
@@ -86,13 +85,8 @@ pub fn run(a: ServeArgs) -> ExitCode {
         spp: a.spp,
         accel: a.accel.clone(),
     };
-    match serve(&a.scene, a.root.as_deref(), Some(a.port), defaults, "glint") {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
-            eprintln!("glint: {}", glint::limits::bounded_message(&msg));
-            ExitCode::from(2)
-        }
-    }
+    serve(&a.scene, a.root.as_deref(), Some(a.port), defaults, "glint")
+        .map_err(glint::job::JobError::Usage)
 }
 
 /// Checks the defaults as a query would be checked.
