@@ -38,12 +38,13 @@ impl IntegratorKind {
     /// The command-line names, in the order of [`IntegratorKind::all`].
     pub const NAMES: [&'static str; 3] = ["whitted", "ao", "path"];
 
-    /// The bounces a command line asks for when it names none: the course's
-    /// 5 for the ray tree, 64 scattering events for the path tracer.
+    /// The bounces `glint`'s commands use when none are named: 5 for the
+    /// ray tree (the course's `raytracer` keeps its 0), 64 scattering events
+    /// for the path tracer.
     pub fn default_bounces(self) -> u32 {
         match self {
             IntegratorKind::Path(_) => PathSettings::default().max_bounces,
-            _ => super::Whitted::default().bounces,
+            _ => 5,
         }
     }
 

@@ -41,12 +41,6 @@ impl Job {
         if let Some(p) = &self.piece {
             self.check_piece(p)?;
         }
-        let cost = self.outputs.iter().any(|o| matches!(o, Output::Cost(_)));
-        if cost && self.sampling.adaptive.is_some() {
-            return Err(JobError::Usage(
-                "--cost-image does not work with --adaptive: adaptive sampling shares its corner rays between pixels, so their cost belongs to no single pixel".into(),
-            ));
-        }
         Ok(())
     }
 
