@@ -90,7 +90,7 @@ enum Command {
     Serve(serve::ServeArgs),
     /// Show what a scene file holds.
     Info {
-        /// Scene file (MIT 6.837 format) or a bare .obj mesh.
+        /// Scene file (MIT 6.837 format), a bare .obj or .ply mesh, or a glTF 2.0 scene (.gltf, .glb).
         scene: PathBuf,
     },
 }
@@ -118,8 +118,10 @@ enum BenchWhat {
 
 const RENDER_HELP: &str = "Render a scene to an image.
 
-SCENE is a scene file in the MIT 6.837 format, or a bare Wavefront .obj mesh, which renders \
-directly: glint frames it with a camera looking at its bounding box and one light.
+SCENE is a scene file in the MIT 6.837 format; a bare Wavefront .obj or Stanford .ply mesh, which renders \
+directly: glint frames it with a camera looking at its bounding box and one light; or a glTF 2.0 \
+scene (.gltf with its buffers, .glb), with its first camera and its lights when it has them \
+(docs/assets.md). Meshes with vertex normals shade smooth; --smooth computes them for the others.
 
 The output format comes from the extension: .png, .tga (uncompressed 24-bit), .ppm (binary P6) \
 and .bmp are 8-bit, clamped to [0, 1]; .exr (OpenEXR) and .pfm (portable float map) keep the \
@@ -136,7 +138,7 @@ behind its centre plane (rays start at t = -inf, as in the course), a perspectiv
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (MIT 6.837 format) or a bare .obj mesh.
+    /// Scene file (MIT 6.837 format), a bare .obj or .ply mesh, or a glTF 2.0 scene (.gltf, .glb).
     scene: PathBuf,
     /// Output image: .png, .tga, .ppm, .bmp (8-bit); .exr, .pfm (unclamped float).
     #[arg(short, long)]
