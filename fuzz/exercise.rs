@@ -50,7 +50,7 @@ pub fn obj(data: &[u8]) {
     assert!(mesh.positions.iter().all(|p| p.is_finite()));
     let scene = Scene {
         camera: Camera::Perspective {
-            center: Vec3::new(0.0, 0.0, 10.0),
+            center: Vec3::new(0.0, 0.0, 10.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 30.0,

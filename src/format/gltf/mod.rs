@@ -324,7 +324,7 @@ impl Loader<'_> {
             group
         } else {
             Node::Transform {
-                matrix: local.as_mat4(),
+                matrix: local,
                 child: Box::new(group),
             }
         }))
@@ -576,7 +576,7 @@ fn node_matrix(node: &gltf::Node) -> glam::DMat4 {
 
 /// The camera of a node whose matrix is `m`: it looks down its −z with +y up.
 fn camera(cam: &gltf::Camera, m: glam::DMat4) -> Option<Camera> {
-    let center = m.transform_point3(glam::DVec3::ZERO).as_vec3();
+    let center = m.transform_point3(glam::DVec3::ZERO);
     let direction = m
         .transform_vector3(glam::DVec3::NEG_Z)
         .normalize_or_zero()
@@ -585,7 +585,7 @@ fn camera(cam: &gltf::Camera, m: glam::DMat4) -> Option<Camera> {
         .transform_vector3(glam::DVec3::Y)
         .normalize_or_zero()
         .as_vec3();
-    if direction == Vec3::ZERO || up == Vec3::ZERO || !center.is_finite() {
+    if direction == Vec3::ZERO || up == Vec3::ZERO || !center.as_vec3().is_finite() {
         return None;
     }
     Some(match cam.projection() {
@@ -671,9 +671,7 @@ pub(crate) fn flatten_to_mesh(scene: &Scene) -> Mesh {
     fn walk(n: &Node, m: glam::DMat4, out: &mut Mesh, all_normals: &mut bool) {
         match n {
             Node::Group(c) => c.iter().for_each(|c| walk(c, m, out, all_normals)),
-            Node::Transform { matrix, child } => {
-                walk(child, m * matrix.as_dmat4(), out, all_normals)
-            }
+            Node::Transform { matrix, child } => walk(child, m * *matrix, out, all_normals),
             Node::Moving { child, .. } => walk(child, m, out, all_normals),
             Node::Shape {
                 shape: Shape::Mesh(mesh),

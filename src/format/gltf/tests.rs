@@ -86,7 +86,10 @@ fn camera_lights_and_materials_are_mapped() {
             angle_deg,
             ..
         } => {
-            assert_eq!((center, direction), (Vec3::new(0., 0., 3.), Vec3::NEG_Z));
+            assert_eq!(
+                (center.as_vec3(), direction),
+                (Vec3::new(0., 0., 3.), Vec3::NEG_Z)
+            );
             let want = (2.0 * (0.25f64.tan() * 2.0).atan()).to_degrees();
             assert!((angle_deg as f64 - want).abs() < 1e-4, "{angle_deg}");
         }
