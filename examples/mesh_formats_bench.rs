@@ -1,5 +1,6 @@
 //! Times reading one generated mesh in every mesh format glint reads (issue
-//! 39's parsing-speed check): OBJ (the lean parallel reader), ASCII PLY,
+//! 39's parsing-speed check): OBJ (the lean parallel reader; with `vn`
+//! normals, the careful one), ASCII PLY,
 //! binary PLY (both byte orders) and glTF (GLB), each through
 //! `glint::format::load_scene` (read, parse, frame; no acceleration
 //! structure), median of 3 runs, with each format's ratio to OBJ.
@@ -45,6 +46,20 @@ fn main() {
         writeln!(obj, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1).unwrap();
     }
     files.push(("OBJ", "m.obj", obj.into_bytes()));
+    // With vertex normals: `tobj` and the per-position normal split
+    // (`format/obj.rs`) instead of the lean reader.
+    let mut obj_vn = String::new();
+    for p in &pos {
+        writeln!(obj_vn, "v {} {} {}", p[0], p[1], p[2]).unwrap();
+    }
+    for _ in &pos {
+        obj_vn.push_str("vn 0 0 1\n");
+    }
+    for t in &tri {
+        let [a, b, c] = t.map(|i| i + 1);
+        writeln!(obj_vn, "f {a}//{a} {b}//{b} {c}//{c}").unwrap();
+    }
+    files.push(("OBJ with vn", "vn.obj", obj_vn.into_bytes()));
     let header = |format: &str| {
         format!(
             "ply\nformat {format} 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\

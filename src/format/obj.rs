@@ -171,7 +171,7 @@ pub(crate) fn parse_obj_careful(bytes: &[u8], path: &Path) -> Result<Mesh, Parse
 /// (returned, with the normal of every vertex: the file's own, or zero, "no
 /// normal", for a position no face uses or a normal that is not finite).
 /// `None` if an index is out of range or the vertices outgrow `u32`.
-fn split_by_normal(
+pub(super) fn split_by_normal(
     positions: &[Vec3],
     indices: &mut [u32],
     normal_indices: &[u32],
