@@ -3,6 +3,8 @@
 //! `cargo test`). Both functions must return normally for every input: a
 //! panic is a crash.
 
+use glint::format::gltf::parse_gltf;
+use glint::format::ply::parse_ply;
 use glint::format::{obj::load_obj_from_bytes, parse_scene};
 use glint::integrator::{AoSettings, NoObserver, RayKind, Whitted};
 use glint::job::{Job, Output};
@@ -48,7 +50,7 @@ pub fn obj(data: &[u8]) {
     assert!(mesh.positions.iter().all(|p| p.is_finite()));
     let scene = Scene {
         camera: Camera::Perspective {
-            center: Vec3::new(0.0, 0.0, 10.0),
+            center: Vec3::new(0.0, 0.0, 10.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 30.0,
@@ -62,6 +64,44 @@ pub fn obj(data: &[u8]) {
         }]),
         effects: Default::default(),
     };
+    trace_a_few(&scene);
+}
+
+/// PLY bytes through the PLY reader; a mesh it accepts must have in-range
+/// indices and finite positions, and is built into a world and hit with
+/// rays (smooth shaded when the file gave normals).
+pub fn ply(data: &[u8]) {
+    match parse_ply(data, Path::new("fuzz.ply")) {
+        Ok(mesh) => check_and_trace(mesh),
+        Err(e) => {
+            let _ = e.render();
+        }
+    }
+}
+
+/// glTF or GLB bytes through the glTF reader (external buffers are refused
+/// here: only `data:` URIs and the GLB chunk are read); a scene it accepts
+/// is built and traced.
+pub fn gltf(data: &[u8]) {
+    match parse_gltf(
+        data,
+        Path::new("fuzz.gltf"),
+        &mut |_| Err("no files".into()),
+    ) {
+        Ok(scene) => trace_a_few(&scene),
+        Err(e) => {
+            let _ = e.render();
+        }
+    }
+}
+
+fn check_and_trace(mesh: glint::scene::Mesh) {
+    let n = mesh.positions.len();
+    assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
+    assert!(mesh.positions.iter().all(|p| p.is_finite()));
+    assert!(mesh.normals.is_empty() || mesh.normals.len() == n);
+    let mut scene = Scene::for_mesh(mesh);
+    scene.smooth_meshes();
     trace_a_few(&scene);
 }
 

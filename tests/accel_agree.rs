@@ -94,7 +94,7 @@ fn shape(shape: ShapeDesc) -> Node {
 
 fn xf(matrix: Mat4, child: Node) -> Node {
     Node::Transform {
-        matrix,
+        matrix: matrix.as_dmat4(),
         child: Box::new(child),
     }
 }
@@ -323,7 +323,7 @@ fn scene(seed: u64) -> (Scene, bool) {
     };
     let scene = Scene {
         camera: Camera::Perspective {
-            center: Vec3::Z * 10.0,
+            center: (Vec3::Z * 10.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 40.0,

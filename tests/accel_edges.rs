@@ -109,7 +109,7 @@ fn lattice_scene() -> Scene {
     ])));
     Scene {
         camera: Camera::Perspective {
-            center: Vec3::new(2.0, 2.0, 12.0),
+            center: Vec3::new(2.0, 2.0, 12.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 40.0,
@@ -319,7 +319,7 @@ fn balls_on_a_floor() -> Scene {
     }
     Scene {
         camera: Camera::Perspective {
-            center: Vec3::new(0.0, 1.5, 14.0),
+            center: Vec3::new(0.0, 1.5, 14.0).as_dvec3(),
             direction: Vec3::new(0.0, -0.12, -1.0),
             up: Vec3::Y,
             angle_deg: 50.0,

@@ -68,7 +68,7 @@ fn scene(camera: Camera, lights: Vec<Light>, materials: Vec<Material>, root: Nod
 
 fn look_down() -> Camera {
     Camera::Perspective {
-        center: Vec3::new(0.0, 10.0, 0.0),
+        center: Vec3::new(0.0, 10.0, 0.0).as_dvec3(),
         direction: Vec3::NEG_Y,
         up: Vec3::Z,
         angle_deg: 30.0,
@@ -397,7 +397,7 @@ const ANGLE: f32 = 30.0;
 fn dot_scene(p: Vec3, radius: f32, aperture: f32) -> Scene {
     let mut sc = scene(
         Camera::Perspective {
-            center: Vec3::ZERO,
+            center: Vec3::ZERO.as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: ANGLE,
@@ -530,7 +530,7 @@ fn slide(from: Vec3, to: Vec3) -> Arc<Motion> {
 fn ball_scene(root: Node, shutter: [f32; 2]) -> Scene {
     let mut sc = scene(
         Camera::Perspective {
-            center: Vec3::new(0.0, 0.0, 6.0),
+            center: Vec3::new(0.0, 0.0, 6.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 40.0,
@@ -599,7 +599,7 @@ fn moving_sphere_is_the_mean_of_static_ones() {
         let root = Node::Group(vec![
             shape(plane(Vec3::Z, -1.5), 0),
             Node::Transform {
-                matrix: m,
+                matrix: m.as_dmat4(),
                 child: Box::new(shape(sphere(Vec3::ZERO, 0.6), 1)),
             },
         ]);
@@ -709,7 +709,7 @@ fn noise_falls_with_samples_soft_shadows() {
     let sc = {
         let mut sc = penumbra_scene();
         sc.camera = Camera::Perspective {
-            center: Vec3::new(0.0, 1.5, 0.0),
+            center: Vec3::new(0.0, 1.5, 0.0).as_dvec3(),
             direction: Vec3::NEG_Y,
             up: Vec3::Z,
             angle_deg: 120.0,
@@ -798,7 +798,7 @@ fn ambient_occlusion_converges_to_its_closed_form() {
     let (h, d) = (1.0f32, 2.0f32);
     let sc = scene(
         Camera::Perspective {
-            center: Vec3::new(0.0, 0.9, 0.0),
+            center: Vec3::new(0.0, 0.9, 0.0).as_dvec3(),
             direction: Vec3::NEG_Y,
             up: Vec3::Z,
             angle_deg: 60.0,

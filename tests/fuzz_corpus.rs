@@ -60,3 +60,15 @@ fn job_args_corpus_never_panics() {
     let n = replay("job_args", exercise::job_args);
     assert!(n >= 10, "only {n} command lines");
 }
+
+#[test]
+fn ply_loader_corpus_never_panics() {
+    let n = replay("ply_loader", exercise::ply);
+    assert!(n >= 10, "only {n} PLY inputs");
+}
+
+#[test]
+fn gltf_loader_corpus_never_panics() {
+    let n = replay("gltf_loader", exercise::gltf);
+    assert!(n >= 10, "only {n} glTF inputs");
+}

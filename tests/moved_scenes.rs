@@ -81,8 +81,10 @@ fn moved(scene: &Scene, m: Move) -> Scene {
         ),
     };
     let point = |p: Vec3| matrix.transform_point3(p);
+    // The camera's centre is f64 in a scene: moved exactly.
+    let point64 = |p: glam::DVec3| matrix.as_dmat4().transform_point3(p);
     s.root = Node::Transform {
-        matrix,
+        matrix: matrix.as_dmat4(),
         child: Box::new(s.root),
     };
     s.camera = match s.camera {
@@ -92,7 +94,7 @@ fn moved(scene: &Scene, m: Move) -> Scene {
             up,
             angle_deg,
         } => Camera::Perspective {
-            center: point(center),
+            center: point64(center),
             direction,
             up,
             angle_deg,
@@ -103,7 +105,7 @@ fn moved(scene: &Scene, m: Move) -> Scene {
             up,
             size,
         } => Camera::Orthographic {
-            center: point(center),
+            center: point64(center),
             direction,
             up,
             size: match m {
@@ -198,7 +200,7 @@ fn shape(shape: ShapeDesc, material: usize) -> Node {
 
 fn xf(matrix: Mat4, child: Node) -> Node {
     Node::Transform {
-        matrix,
+        matrix: matrix.as_dmat4(),
         child: Box::new(child),
     }
 }
@@ -208,7 +210,7 @@ fn xf(matrix: Mat4, child: Node) -> Node {
 fn own_whitted() -> Scene {
     Scene {
         camera: Camera::Perspective {
-            center: Vec3::new(0.0, 1.5, 7.0),
+            center: Vec3::new(0.0, 1.5, 7.0).as_dvec3(),
             direction: Vec3::new(0.0, -0.25, -1.0),
             up: Vec3::Y,
             angle_deg: 40.0,
@@ -349,7 +351,7 @@ fn own_mesh_room() -> Scene {
     ];
     Scene {
         camera: Camera::Perspective {
-            center: Vec3::new(3.0, 4.5, 8.0),
+            center: Vec3::new(3.0, 4.5, 8.0).as_dvec3(),
             direction: Vec3::new(-0.35, -0.45, -1.0),
             up: Vec3::Y,
             angle_deg: 45.0,

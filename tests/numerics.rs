@@ -41,7 +41,7 @@ fn tri(a: Vec3, b: Vec3, c: Vec3, material: usize) -> Node {
 
 fn xf(matrix: Mat4, child: Node) -> Node {
     Node::Transform {
-        matrix,
+        matrix: matrix.as_dmat4(),
         child: Box::new(child),
     }
 }
@@ -52,7 +52,7 @@ fn v(x: f32, y: f32, z: f32) -> Vec3 {
 
 fn persp(center: Vec3, direction: Vec3, up: Vec3, angle_deg: f32) -> Camera {
     Camera::Perspective {
-        center,
+        center: center.as_dvec3(),
         direction,
         up,
         angle_deg,
@@ -61,7 +61,7 @@ fn persp(center: Vec3, direction: Vec3, up: Vec3, angle_deg: f32) -> Camera {
 
 fn ortho(center: Vec3, direction: Vec3, up: Vec3, size: f32) -> Camera {
     Camera::Orthographic {
-        center,
+        center: center.as_dvec3(),
         direction,
         up,
         size,

@@ -19,7 +19,7 @@ use glint::world::{BuildOptions, World};
 fn scene(root: Node, materials: Vec<Phong>, lights: Vec<Light>, bg: Background) -> Scene {
     Scene {
         camera: Camera::Orthographic {
-            center: Vec3::new(0.0, 0.0, 10.0),
+            center: Vec3::new(0.0, 0.0, 10.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             size: 2.0,

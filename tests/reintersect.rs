@@ -133,7 +133,7 @@ fn node(shape: ShapeDesc) -> Node {
 
 fn xf(m: DMat4, child: Node) -> Node {
     Node::Transform {
-        matrix: m.as_mat4(),
+        matrix: m,
         child: Box::new(child),
     }
 }
@@ -197,8 +197,6 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
                 size * r.range(0.3, 3.0),
             );
             let m = DMat4::from_translation(pos) * rotation(r) * DMat4::from_scale(scale);
-            // The scene stores the matrix in f32: use exactly that one.
-            let m = m.as_mat4().as_dmat4();
             let shape = if kind == Kind::Ellipsoid {
                 ShapeDesc::Sphere {
                     center: Vec3::ZERO,
@@ -297,7 +295,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
 fn scene(root: Node) -> Scene {
     Scene {
         camera: Camera::Perspective {
-            center: Vec3::ZERO,
+            center: Vec3::ZERO.as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 40.0,

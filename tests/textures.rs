@@ -409,7 +409,7 @@ fn object_space_textures_follow_their_object() {
     };
     let scene_at = |shift: f32| Scene {
         camera: Camera::Orthographic {
-            center: Vec3::new(0.0, 0.0, 5.0),
+            center: Vec3::new(0.0, 0.0, 5.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             size: 4.0,
@@ -430,7 +430,7 @@ fn object_space_textures_follow_their_object() {
             },
         ],
         root: Node::Transform {
-            matrix: Mat4::from_translation(Vec3::new(shift, 0.0, 0.0)),
+            matrix: Mat4::from_translation(Vec3::new(shift, 0.0, 0.0)).as_dmat4(),
             child: Box::new(Node::Shape {
                 shape: ShapeDesc::Plane {
                     normal: Vec3::Z,

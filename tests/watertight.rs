@@ -63,7 +63,7 @@ fn placement() -> DMat4 {
 fn scene() -> Scene {
     Scene {
         camera: Camera::Perspective {
-            center: Vec3::new(1200.0, -300.0, 790.0),
+            center: Vec3::new(1200.0, -300.0, 790.0).as_dvec3(),
             direction: Vec3::new(1.0, -0.5, -0.3),
             up: Vec3::Y,
             angle_deg: 40.0,
@@ -72,7 +72,7 @@ fn scene() -> Scene {
         background: Background::default(),
         materials: vec![],
         root: Node::Transform {
-            matrix: placement().as_mat4(),
+            matrix: placement(),
             child: Box::new(Node::Shape {
                 shape: ShapeDesc::Mesh(Arc::new(bumpy_sphere())),
                 material: None,

@@ -100,7 +100,7 @@ fn sphere(center: Vec3, radius: f32, material: usize) -> Node {
 fn floor_scene(glass: Phong) -> Scene {
     Scene {
         camera: Camera::Orthographic {
-            center: Vec3::new(0.0, 5.0, 0.0),
+            center: Vec3::new(0.0, 5.0, 0.0).as_dvec3(),
             direction: Vec3::NEG_Y,
             up: Vec3::Z,
             size: 4.0,
@@ -271,7 +271,7 @@ fn back_faces_are_black_unless_shade_back() {
     // The camera inside a sphere sees its inside: black by default, lit with shade_back.
     let mut scene = floor_scene(Phong::default());
     scene.camera = Camera::Perspective {
-        center: Vec3::ZERO,
+        center: Vec3::ZERO.as_dvec3(),
         direction: Vec3::NEG_Z,
         up: Vec3::Y,
         angle_deg: 30.0,

@@ -5,11 +5,19 @@
 //! line by line: every `v`/`vt`/`vn`/`f`/`l` line that `tobj` would reject is
 //! reported at its line and column. Anything `tobj` still rejects is reported
 //! at the line it was reading when it stopped.
+//!
+//! Vertex normals (`vn`) are read when every face corner names one (`v//vn`
+//! or `v/vt/vn`): the mesh is then shaded smooth with them, as with PLY and
+//! glTF normals. A position whose corners name different normals (a crease)
+//! is repeated once per further normal, with the same f32 coordinates, so
+//! the surface stays watertight. A file mixing corners with and without
+//! normals is read flat.
 
 use super::diagnostic::{decode, quote, ParseError};
 use crate::limits::{MAX_FACE_CORNERS, MAX_OBJ_LINE_BYTES};
 use crate::math::Vec3;
 use crate::scene::Mesh;
+use std::collections::HashMap;
 use std::io;
 use std::path::Path;
 
@@ -56,7 +64,7 @@ pub(crate) fn parse_obj(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
 /// The careful reader: every line checked with positions, then `tobj`.
 pub(crate) fn parse_obj_careful(bytes: &[u8], path: &Path) -> Result<Mesh, ParseError> {
     let text = decode(bytes, path)?;
-    check(text, path)?;
+    let corners = check(text, path)?;
     // `tobj` turns a polyline of 3+ points into a face; a mesh has no lines,
     // so blank them (keeping the line count, for error positions).
     let without_lines;
@@ -118,22 +126,100 @@ pub(crate) fn parse_obj_careful(bytes: &[u8], path: &Path) -> Result<Mesh, Parse
             found,
         ));
     }
+    // The file's normals, when every face corner names one (`v//vn`,
+    // `v/vt/vn`); a file mixing corners with and without them is read flat
+    // (`--smooth` computes normals for it).
+    let with_normals = corners.with_normal > 0 && corners.without_normal == 0;
+    let too_many = || ParseError::at(path, text, 0, 0, "fewer than 2^32 vertices", "more");
     for model in models {
         let m = model.mesh;
-        let base = u32::try_from(mesh.positions.len())
-            .map_err(|_| ParseError::at(path, text, 0, 0, "fewer than 2^32 vertices", "more"))?;
-        mesh.positions.extend(
-            m.positions
-                .chunks_exact(3)
-                .map(|c| Vec3::new(c[0], c[1], c[2])),
-        );
+        let base = u32::try_from(mesh.positions.len()).map_err(|_| too_many())?;
+        let positions: Vec<Vec3> = (m.positions.chunks_exact(3))
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        let mut indices = m.indices;
+        if with_normals && m.normal_indices.len() == indices.len() {
+            let normals: Vec<Vec3> = (m.normals.chunks_exact(3))
+                .map(|c| Vec3::new(c[0], c[1], c[2]))
+                .collect();
+            let (extra, vertex_normals) =
+                split_by_normal(&positions, &mut indices, &m.normal_indices, &normals)
+                    .ok_or_else(too_many)?;
+            mesh.normals.extend(vertex_normals);
+            mesh.positions.extend(positions);
+            mesh.positions.extend(extra);
+        } else {
+            mesh.positions.extend(positions);
+        }
+        u32::try_from(mesh.positions.len()).map_err(|_| too_many())?;
         mesh.triangles.extend(
-            m.indices
+            indices
                 .chunks_exact(3)
                 .map(|t| [base + t[0], base + t[1], base + t[2]]),
         );
     }
+    if mesh.normals.len() != mesh.positions.len() {
+        mesh.normals.clear();
+    }
     Ok(mesh)
+}
+
+/// Gives each position the normal its corners name: `indices` (positions)
+/// and `normal_indices` (normals) are per corner. A position whose corners
+/// all name one normal keeps its index; one whose corners name several (a
+/// crease) is repeated, once per further normal, after the `positions`
+/// (returned, with the normal of every vertex: the file's own, or zero, "no
+/// normal", for a position no face uses or a normal that is not finite).
+/// `None` if an index is out of range or the vertices outgrow `u32`.
+pub(super) fn split_by_normal(
+    positions: &[Vec3],
+    indices: &mut [u32],
+    normal_indices: &[u32],
+    normals: &[Vec3],
+) -> Option<(Vec<Vec3>, Vec<Vec3>)> {
+    const NONE: u32 = u32::MAX;
+    let normal = |k: u32| {
+        let n = *normals.get(k as usize)?;
+        Some(if n.is_finite() { n } else { Vec3::ZERO })
+    };
+    let mut normal_of = vec![NONE; positions.len()];
+    let mut extra = Vec::new();
+    let mut extra_normals = Vec::new();
+    let mut repeated: HashMap<(u32, u32), u32> = HashMap::new();
+    for (p, &n) in indices.iter_mut().zip(normal_indices) {
+        normal(n)?;
+        let slot = normal_of.get_mut(*p as usize)?;
+        if *slot == NONE {
+            *slot = n;
+        } else if *slot != n {
+            let next = u32::try_from(positions.len() + extra.len()).ok()?;
+            let i = *repeated.entry((*p, n)).or_insert(next);
+            if i == next {
+                extra.push(positions[*p as usize]);
+                extra_normals.push(normal(n)?);
+            }
+            *p = i;
+        }
+    }
+    let mut out: Vec<Vec3> = normal_of
+        .iter()
+        .map(|&n| {
+            if n == NONE {
+                Some(Vec3::ZERO)
+            } else {
+                normal(n)
+            }
+        })
+        .collect::<Option<_>>()?;
+    out.extend(extra_normals);
+    Some((extra, out))
+}
+
+/// How many face corners name a normal and how many do not.
+#[derive(Default)]
+struct Corners {
+    with_normal: usize,
+    without_normal: usize,
 }
 
 /// Counts of the elements defined so far, which face indices refer to.
@@ -146,9 +232,11 @@ struct Counts {
     colored: Option<bool>,
 }
 
-/// Checks every line `tobj` could reject, with positions.
-fn check(text: &str, path: &Path) -> Result<(), ParseError> {
+/// Checks every line `tobj` could reject, with positions; counts the face
+/// corners with and without a normal.
+fn check(text: &str, path: &Path) -> Result<Corners, ParseError> {
     let mut counts = Counts::default();
+    let mut corners = Corners::default();
     for (i, line) in text.split('\n').enumerate() {
         if line.len() > MAX_OBJ_LINE_BYTES {
             // Checked before the line is split: one face line of 100 MB used
@@ -218,12 +306,17 @@ fn check(text: &str, path: &Path) -> Result<(), ParseError> {
                 }
                 for (k, &(c, w)) in words.iter().enumerate().skip(1) {
                     check_corner(w, &counts).map_err(|e| at(c, e, found(k)))?;
+                    if w.split('/').nth(2).is_some_and(|n| !n.is_empty()) {
+                        corners.with_normal += 1;
+                    } else {
+                        corners.without_normal += 1;
+                    }
                 }
             }
             _ => {}
         }
     }
-    Ok(())
+    Ok(corners)
 }
 
 /// After `v x y z`: nothing, a `w` divisor, or an RGB colour, as `tobj` reads
@@ -329,6 +422,48 @@ mod tests {
 
     fn parse(src: &str) -> Result<Mesh, ParseError> {
         parse_obj(src.as_bytes(), Path::new("m.obj"))
+    }
+
+    #[test]
+    fn vertex_normals_are_read_per_position() {
+        // A quad whose corners name their normals out of order.
+        let m = parse(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+             vn 0 0 1\nvn 0 0.6 0.8\nvn 1 0 0\nvn 0 1 0\n\
+             f 1//2 2//1 3//4 4//3\n",
+        )
+        .unwrap();
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(
+            m.normals,
+            vec![Vec3::new(0.0, 0.6, 0.8), Vec3::Z, Vec3::Y, Vec3::X]
+        );
+        // `v/vt/vn` corners too; the same file without normals is flat.
+        let m = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\n");
+        assert_eq!(m.unwrap().normals, vec![Vec3::Z; 3]);
+        let m = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1 2 3\n").unwrap();
+        assert!(m.normals.is_empty());
+    }
+
+    #[test]
+    fn a_crease_repeats_its_positions() {
+        // Two triangles folded along the edge 1-2, each with its own normal:
+        // the edge's positions are repeated for the second normal.
+        let m = parse(
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\nvn 0 0 1\nvn 1 0 0\n\
+             f 1//1 2//1 3//1\nf 2//2 4//2 3//2\n",
+        )
+        .unwrap();
+        assert_eq!(m.positions.len(), 6);
+        assert_eq!(m.triangles, vec![[0, 1, 2], [4, 3, 5]]);
+        assert_eq!(m.positions[4], m.positions[1]);
+        assert_eq!(m.positions[5], m.positions[2]);
+        assert_eq!(m.normals[..3], [Vec3::Z; 3]);
+        assert_eq!(m.normals[3..], [Vec3::X; 3]);
+        // Corners with and without normals: flat.
+        let m = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2 3//1\n").unwrap();
+        assert!(m.normals.is_empty());
     }
 
     #[test]

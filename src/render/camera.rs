@@ -41,7 +41,7 @@ impl Rig {
     fn at(&self, time: f32) -> Camera {
         let m = self.motion.matrix(time).as_dmat4();
         let o = self.origin;
-        let point = |p: Vec3| (m.transform_point3(p.as_dvec3() + o) - o).as_vec3();
+        let point = |p: DVec3| m.transform_point3(p + o) - o;
         let vector = |v: Vec3| m.transform_vector3(v.as_dvec3()).as_vec3();
         match self.base {
             Camera::Orthographic {
@@ -79,14 +79,14 @@ impl CameraModel {
                 direction,
                 up,
                 size,
-            } => (center, direction, up, size, false),
+            } => (center.as_vec3(), direction, up, size, false),
             Camera::Perspective {
                 center,
                 direction,
                 up,
                 angle_deg,
             } => (
-                center,
+                center.as_vec3(),
                 direction,
                 up,
                 2.0 * (angle_deg.to_radians() * 0.5).tan(),
@@ -279,13 +279,13 @@ mod tests {
     fn project_inverts_ray() {
         for cam in [
             Camera::Perspective {
-                center: Vec3::new(1.0, 2.0, 3.0),
+                center: Vec3::new(1.0, 2.0, 3.0).as_dvec3(),
                 direction: Vec3::new(0.2, -0.5, -1.0),
                 up: Vec3::Y,
                 angle_deg: 40.0,
             },
             Camera::Orthographic {
-                center: Vec3::new(1.0, 2.0, 3.0),
+                center: Vec3::new(1.0, 2.0, 3.0).as_dvec3(),
                 direction: Vec3::new(0.2, -0.5, -1.0),
                 up: Vec3::Y,
                 size: 5.0,
@@ -329,13 +329,13 @@ mod tests {
         };
         for cam in [
             Camera::Perspective {
-                center,
+                center: center.as_dvec3(),
                 direction,
                 up: Vec3::Y,
                 angle_deg: 40.0,
             },
             Camera::Orthographic {
-                center,
+                center: center.as_dvec3(),
                 direction,
                 up: Vec3::Y,
                 size: 5.0,
@@ -386,7 +386,7 @@ mod tests {
     #[test]
     fn shutter_times_spread_over_the_open_interval() {
         let pinhole = CameraModel::new(&Camera::Perspective {
-            center: Vec3::ZERO,
+            center: Vec3::ZERO.as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 30.0,
@@ -417,7 +417,7 @@ mod tests {
     fn a_moving_camera_is_posed_in_world_space() {
         use crate::math::{Keyframe, Motion};
         let cam = Camera::Perspective {
-            center: Vec3::new(0.0, 0.0, 5.0),
+            center: Vec3::new(0.0, 0.0, 5.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 30.0,
@@ -451,7 +451,7 @@ mod tests {
     #[test]
     fn depth_is_measured_along_the_viewing_direction() {
         let c = CameraModel::new(&Camera::Perspective {
-            center: Vec3::new(1.0, 2.0, 3.0),
+            center: Vec3::new(1.0, 2.0, 3.0).as_dvec3(),
             direction: Vec3::new(0.0, 0.0, -2.0),
             up: Vec3::Y,
             angle_deg: 40.0,
@@ -465,7 +465,7 @@ mod tests {
     #[test]
     fn frame_is_orthonormal_for_skewed_up() {
         let c = CameraModel::new(&Camera::Perspective {
-            center: Vec3::ZERO,
+            center: Vec3::ZERO.as_dvec3(),
             direction: Vec3::new(0.0, -6.0, -16.0),
             up: Vec3::Y,
             angle_deg: 30.0,
@@ -479,7 +479,7 @@ mod tests {
     #[test]
     fn perspective_edges_are_at_half_angle() {
         let c = CameraModel::new(&Camera::Perspective {
-            center: Vec3::ZERO,
+            center: Vec3::ZERO.as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             angle_deg: 90.0,
@@ -491,7 +491,7 @@ mod tests {
     #[test]
     fn orthographic_size_is_the_full_extent() {
         let c = CameraModel::new(&Camera::Orthographic {
-            center: Vec3::new(0.0, 0.0, 10.0),
+            center: Vec3::new(0.0, 0.0, 10.0).as_dvec3(),
             direction: Vec3::NEG_Z,
             up: Vec3::Y,
             size: 5.0,

@@ -78,7 +78,7 @@ impl Scene {
         let view = Vec3::new(0.3, 0.4, 1.0).normalize();
         Scene {
             camera: Camera::Perspective {
-                center: c + view * r * 2.6,
+                center: (c + view * r * 2.6).as_dvec3(),
                 direction: -view,
                 up: Vec3::Y,
                 angle_deg: 45.0,

@@ -1,5 +1,6 @@
 use super::Summary;
 use crate::math::{Aabb, Mat4, Motion, Vec3};
+use glam::DMat4;
 use std::sync::Arc;
 
 /// A triangle mesh: shared vertices, triangles by index.
@@ -80,8 +81,10 @@ pub enum Node {
     Group(Vec<Node>),
     /// A child seen through an object-to-parent matrix.
     Transform {
-        /// Maps the child's space into the parent's.
-        matrix: Mat4,
+        /// Maps the child's space into the parent's; in double precision, as
+        /// the file gave it (`crate::world` composes the transforms in f64
+        /// and rounds each vertex once, in rendering space).
+        matrix: DMat4,
         /// The transformed subtree.
         child: Box<Node>,
     },
@@ -117,7 +120,7 @@ impl Node {
             Node::Group(children) => children
                 .iter()
                 .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds(m))),
-            Node::Transform { matrix, child } => child.bounds(&(*m * *matrix)),
+            Node::Transform { matrix, child } => child.bounds(&(m.as_dmat4() * *matrix).as_mat4()),
             Node::Moving { motion, child } => {
                 motion.swept_bounds(&child.bounds(&Mat4::IDENTITY), m)
             }
@@ -182,7 +185,7 @@ mod tests {
 
     fn xf(m: Mat4, child: Node) -> Node {
         Node::Transform {
-            matrix: m,
+            matrix: m.as_dmat4(),
             child: Box::new(child),
         }
     }

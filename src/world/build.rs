@@ -47,7 +47,7 @@ impl World {
     /// Flattens `scene` into rendering space (the camera's centre at the
     /// origin) and builds the aggregate.
     pub fn build(scene: &Scene, opts: BuildOptions) -> World {
-        World::build_at(scene, opts, camera_center(&scene.camera).as_dvec3())
+        World::build_at(scene, opts, camera_center(&scene.camera))
     }
 
     /// [`World::build`] without the move into rendering space: everything
@@ -112,7 +112,7 @@ impl World {
     }
 }
 
-fn camera_center(c: &Camera) -> Vec3 {
+fn camera_center(c: &Camera) -> DVec3 {
     match c {
         Camera::Orthographic { center, .. } | Camera::Perspective { center, .. } => *center,
     }
@@ -127,7 +127,7 @@ fn camera_to_render_space(c: &Camera, origin: DVec3) -> Camera {
     let mut c = c.clone();
     match &mut c {
         Camera::Orthographic { center, .. } | Camera::Perspective { center, .. } => {
-            *center = point_to_render(*center, origin)
+            *center -= origin
         }
     }
     c
@@ -210,7 +210,7 @@ impl Flattener {
                 SceneTree::Group(children.iter().map(|c| self.node(c, m, instance)).collect())
             }
             Node::Transform { matrix, child } => {
-                let m = m * matrix.as_dmat4();
+                let m = m * *matrix;
                 let inv = m.inverse();
                 if !inv.is_finite() || m.determinant() == 0.0 {
                     // A singular transform squashes its subtree to nothing visible.
@@ -423,7 +423,7 @@ mod tests {
     fn scene(root: Node) -> Scene {
         Scene {
             camera: Camera::Orthographic {
-                center: Vec3::ZERO,
+                center: Vec3::ZERO.as_dvec3(),
                 direction: Vec3::NEG_Z,
                 up: Vec3::Y,
                 size: 1.0,
@@ -448,7 +448,7 @@ mod tests {
 
     fn xf(m: Mat4, child: Node) -> Node {
         Node::Transform {
-            matrix: m,
+            matrix: m.as_dmat4(),
             child: Box::new(child),
         }
     }

@@ -414,7 +414,7 @@ mod tests {
         };
         let scene = Scene {
             camera: Camera::Orthographic {
-                center: Vec3::ZERO,
+                center: Vec3::ZERO.as_dvec3(),
                 direction: Vec3::NEG_Z,
                 up: Vec3::Y,
                 size: 1.0,

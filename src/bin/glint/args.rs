@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// The scene and its accelerator.
 #[derive(Args)]
 pub struct SceneArgs {
-    /// Scene file (MIT 6.837 format) or a bare .obj mesh.
+    /// Scene file (MIT 6.837 format), a bare .obj or .ply mesh, or a glTF 2.0 scene (.gltf, .glb).
     pub scene: PathBuf,
     /// Accelerator: bvh8 (the fast default; bvh4 is an alias), none, grid, grid:NxNxN, nested-grid[:THRESHOLD[:DEPTH]] (defaults 16:2), octree, octree-inner, bvh (= bvh-sah), bvh-median, bvh-midpoint, bvh-hierarchy. `traverse` and `structure` show the one named (bvh8 as its binary SAH twin).
     #[arg(long, default_value = "bvh8")]

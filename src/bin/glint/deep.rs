@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 fn xf(matrix: Mat4, child: Node) -> Node {
     Node::Transform {
-        matrix,
+        matrix: matrix.as_dmat4(),
         child: Box::new(child),
     }
 }
@@ -130,7 +130,7 @@ fn framed(root: Node) -> Scene {
     let (c, r) = (b.center(), 0.5 * b.extent().length());
     let view = Vec3::new(0.3, 0.4, 1.0).normalize();
     scene.camera = glint::scene::Camera::Perspective {
-        center: c + view * r * 2.2,
+        center: (c + view * r * 2.2).as_dvec3(),
         direction: -view,
         up: Vec3::Y,
         angle_deg: 45.0,

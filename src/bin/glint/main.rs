@@ -80,7 +80,7 @@ enum Command {
     Merge(merge::MergeArgs),
     /// Show what a scene file holds.
     Info {
-        /// Scene file (MIT 6.837 format) or a bare .obj mesh.
+        /// Scene file (MIT 6.837 format), a bare .obj or .ply mesh, or a glTF 2.0 scene (.gltf, .glb).
         scene: PathBuf,
     },
 }

@@ -13,8 +13,10 @@ use std::path::PathBuf;
 
 pub const RENDER_HELP: &str = "Render a scene to an image.
 
-SCENE is a scene file in the MIT 6.837 format, or a bare Wavefront .obj mesh, which renders \
-directly: glint frames it with a camera looking at its bounding box and one light.
+SCENE is a scene file in the MIT 6.837 format; a bare Wavefront .obj or Stanford .ply mesh, which renders \
+directly: glint frames it with a camera looking at its bounding box and one light; or a glTF 2.0 \
+scene (.gltf with its buffers, .glb), with its first camera and its lights when it has them \
+(docs/assets.md). Meshes with vertex normals shade smooth; --smooth computes them for the others.
 
 The output format comes from the extension: .png, .tga (uncompressed 24-bit), .ppm (binary P6) \
 and .bmp are 8-bit, clamped to [0, 1]; .exr (OpenEXR) and .pfm (portable float map) keep the \

@@ -8,6 +8,7 @@ use crate::format::diagnostic::{quote, ParseError};
 use crate::limits::MAX_COLOR;
 use crate::math::Vec3;
 use crate::scene::Mesh;
+use glam::DVec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -119,12 +120,35 @@ impl<'a> Parser<'a> {
         }
     }
 
+    /// [`Parser::number`] in double precision, for the numbers that place
+    /// things in the world (the camera's centre, transforms): they keep every
+    /// digit the file gives until the scene is moved into the camera-centred
+    /// rendering space. The numbers accepted are exactly those
+    /// [`Parser::number`] accepts.
+    pub fn number64(&mut self) -> Result<(f64, Token<'a>)> {
+        let (_, tok) = self.number()?;
+        // A decimal that parses as a finite f32 parses as a finite f64.
+        let v: f64 = tok
+            .text
+            .parse()
+            .map_err(|_| self.error(Some(tok), "a number"))?;
+        Ok((v, tok))
+    }
+
     /// Reads three numbers; the tokens are kept for error messages.
     pub fn vec3(&mut self) -> Result<(Vec3, [Token<'a>; 3])> {
         let (x, tx) = self.number()?;
         let (y, ty) = self.number()?;
         let (z, tz) = self.number()?;
         Ok((Vec3::new(x, y, z), [tx, ty, tz]))
+    }
+
+    /// [`Parser::vec3`] in double precision (see [`Parser::number64`]).
+    pub fn dvec3(&mut self) -> Result<(DVec3, [Token<'a>; 3])> {
+        let (x, tx) = self.number64()?;
+        let (y, ty) = self.number64()?;
+        let (z, tz) = self.number64()?;
+        Ok((DVec3::new(x, y, z), [tx, ty, tz]))
     }
 
     /// Reads three numbers each within `[0, max]` (a colour, or attenuation

@@ -159,7 +159,7 @@ impl<'a> Parser<'a> {
     /// `Transform { commands }` inside a texture: no child object.
     fn texture_transform(&mut self, kw: Token<'a>) -> Result<Mat4> {
         self.open(kw)?;
-        let mut m = Mat4::IDENTITY;
+        let mut m = glam::DMat4::IDENTITY;
         loop {
             let t = self.next();
             match t {
@@ -177,6 +177,8 @@ impl<'a> Parser<'a> {
                 }
             }
         }
+        // Composed in f64; textures look points up in f32.
+        let m = m.as_mat4();
         if !m.is_finite() {
             return Err(self.error(Some(kw), "a transform with finite entries"));
         }

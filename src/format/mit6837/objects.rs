@@ -6,7 +6,7 @@ use super::lexer::{Kind, Token};
 use super::Result;
 use crate::format::diagnostic::{io_reason, quote};
 use crate::format::obj::LoadError;
-use crate::math::{Keyframe, Mat4, Motion, Quat, Vec3};
+use crate::math::{Keyframe, Motion, Quat, Vec3};
 use crate::scene::{Node, ShapeDesc};
 use std::path::Path;
 use std::sync::Arc;
@@ -100,7 +100,7 @@ impl<'a> Parser<'a> {
     /// `Transform { command* object }`.
     fn transform(&mut self, kw: Token<'a>, material: Current) -> Result<Node> {
         self.open(kw)?;
-        let mut matrix = Mat4::IDENTITY;
+        let mut matrix = glam::DMat4::IDENTITY;
         let child = loop {
             let t = self.next();
             match t {
@@ -124,9 +124,10 @@ impl<'a> Parser<'a> {
             }
         }
         // Rendering maps rays through the inverse; a singular or overflowing
-        // matrix would fill the image with NaN.
-        let det = matrix.as_dmat4().determinant();
-        if !matrix.is_finite() || det == 0.0 || !det.is_finite() {
+        // matrix would fill the image with NaN. Rendering rounds the matrix to
+        // f32 where it keeps a transform, so that one must be invertible too.
+        let det = matrix.as_mat4().as_dmat4().determinant();
+        if !matrix.as_mat4().is_finite() || det == 0.0 || !det.is_finite() {
             return Err(self.error_found(
                 Some(kw),
                 "an invertible transform",

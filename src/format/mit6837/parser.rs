@@ -156,7 +156,7 @@ impl<'a> Parser<'a> {
         };
         let close = self.fields(kw, names, |p, f| {
             match f.text {
-                "center" => center = Some(p.vec3()?.0),
+                "center" => center = Some(p.dvec3()?.0),
                 "direction" => direction = Some(p.vec3()?),
                 "up" => up = Some(p.vec3()?),
                 "aperture" => {

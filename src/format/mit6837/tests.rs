@@ -38,7 +38,7 @@ fn materials_of(s: &Scene) -> Vec<Option<usize>> {
 fn cameras() {
     let s = scene(&format!("{CAMERA}Group {{ numObjects 0 }}"));
     let want = Camera::Orthographic {
-        center: Vec3::new(0.0, 0.0, 10.0),
+        center: Vec3::new(0.0, 0.0, 10.0).as_dvec3(),
         direction: -Vec3::Z,
         up: Vec3::Y,
         size: 5.0,
@@ -48,7 +48,7 @@ fn cameras() {
         "PerspectiveCamera{angle 30 up 0 1 0 center 1 2 3 direction 0 0 -1}Group{numObjects 0}",
     );
     assert!(
-        matches!(s.camera, Camera::Perspective { angle_deg, center, .. } if angle_deg == 30.0 && center == Vec3::new(1.0, 2.0, 3.0))
+        matches!(s.camera, Camera::Perspective { angle_deg, center, .. } if angle_deg == 30.0 && center == glam::DVec3::new(1.0, 2.0, 3.0))
     );
 }
 
@@ -254,7 +254,7 @@ fn objects() {
     assert_eq!(l[2].0, ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]));
     let Node::Group(top) = &s.root else { panic!() };
     assert!(
-        matches!(&top[3], Node::Transform { matrix, child } if *matrix == Mat4::from_translation(Vec3::X) && **child == Node::Group(vec![]))
+        matches!(&top[3], Node::Transform { matrix, child } if *matrix == Mat4::from_translation(Vec3::X).as_dmat4() && **child == Node::Group(vec![]))
     );
 }
 

@@ -4,26 +4,29 @@
 //! listed (column vectors): the last command acts on the object first. This
 //! holds for `Matrix` too, although the course's reader pre-multiplied that one
 //! (see `docs/scene-format.md`).
+//!
+//! Matrices are built in double precision from the numbers as written
+//! (`Parser::number64`): a `Translate 100000.3 0 0` keeps its `.3`.
 
 use super::cursor::{vec_text, Parser};
 use super::lexer::{Kind, Token};
 use super::Result;
-use crate::math::{Mat4, Vec3};
+use glam::{DMat4, DVec3};
 
 impl<'a> Parser<'a> {
     /// If `kw` is a transform command, reads its arguments and returns its
     /// matrix; otherwise returns `None` and reads nothing.
-    pub(super) fn transform_command(&mut self, kw: Token<'a>) -> Result<Option<Mat4>> {
+    pub(super) fn transform_command(&mut self, kw: Token<'a>) -> Result<Option<DMat4>> {
         if kw.kind != Kind::Word {
             return Ok(None);
         }
         let m = match kw.text {
-            "Translate" => Mat4::from_translation(self.vec3()?.0),
-            "Scale" => Mat4::from_scale(self.vec3()?.0),
-            "UniformScale" => Mat4::from_scale(Vec3::splat(self.number()?.0)),
-            "XRotate" => Mat4::from_rotation_x(self.number()?.0.to_radians()),
-            "YRotate" => Mat4::from_rotation_y(self.number()?.0.to_radians()),
-            "ZRotate" => Mat4::from_rotation_z(self.number()?.0.to_radians()),
+            "Translate" => DMat4::from_translation(self.dvec3()?.0),
+            "Scale" => DMat4::from_scale(self.dvec3()?.0),
+            "UniformScale" => DMat4::from_scale(DVec3::splat(self.number64()?.0)),
+            "XRotate" => DMat4::from_rotation_x(self.number64()?.0.to_radians()),
+            "YRotate" => DMat4::from_rotation_y(self.number64()?.0.to_radians()),
+            "ZRotate" => DMat4::from_rotation_z(self.number64()?.0.to_radians()),
             "Rotate" => self.rotate(kw)?,
             "Matrix" => self.matrix(kw)?,
             _ => return Ok(None),
@@ -33,15 +36,14 @@ impl<'a> Parser<'a> {
 
     /// `Rotate x y z degrees`; the course writes it `Rotate { x y z degrees }`,
     /// so the braces are optional.
-    fn rotate(&mut self, kw: Token<'a>) -> Result<Mat4> {
+    fn rotate(&mut self, kw: Token<'a>) -> Result<DMat4> {
         let braced = self.optional_open();
-        let (axis, toks) = self.vec3()?;
-        let degrees = self.number()?.0;
+        let (axis, toks) = self.dvec3()?;
+        let degrees = self.number64()?.0;
         if braced {
             self.close(kw)?;
         }
         // f64, so that a huge but finite axis still normalises.
-        let axis = axis.as_dvec3();
         if axis.length_squared() == 0.0 {
             return Err(self.error_found(
                 Some(toks[0]),
@@ -49,25 +51,25 @@ impl<'a> Parser<'a> {
                 vec_text(&toks),
             ));
         }
-        Ok(Mat4::from_axis_angle(
-            axis.normalize().as_vec3(),
+        Ok(DMat4::from_axis_angle(
+            axis.normalize(),
             degrees.to_radians(),
         ))
     }
 
     /// `Matrix m00 m01 … m33`: 16 numbers, row by row. The course writes it
     /// `Matrix { … }`, so the braces are optional.
-    fn matrix(&mut self, kw: Token<'a>) -> Result<Mat4> {
+    fn matrix(&mut self, kw: Token<'a>) -> Result<DMat4> {
         let braced = self.optional_open();
         let mut rows = [0.0; 16];
         for v in &mut rows {
-            *v = self.number()?.0;
+            *v = self.number64()?.0;
         }
         if braced {
             self.close(kw)?;
         }
         // glam reads arrays column by column; the file gives rows.
-        Ok(Mat4::from_cols_array(&rows).transpose())
+        Ok(DMat4::from_cols_array(&rows).transpose())
     }
 
     /// Consumes a `{` if one is next.
@@ -83,16 +85,34 @@ impl<'a> Parser<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::{Mat4, Vec3};
     use std::path::Path;
 
-    /// The product of the commands in `src`, as a Transform block composes them.
-    fn compose(src: &str) -> Mat4 {
+    /// The product of the commands in `src`, as a Transform block composes
+    /// them, in f64.
+    fn compose64(src: &str) -> DMat4 {
         let mut p = Parser::new(src, Path::new("t.txt"));
-        let mut m = Mat4::IDENTITY;
+        let mut m = DMat4::IDENTITY;
         while let Some(t) = p.next() {
             m *= p.transform_command(t).unwrap().expect("a command");
         }
         m
+    }
+
+    fn compose(src: &str) -> Mat4 {
+        compose64(src).as_mat4()
+    }
+
+    #[test]
+    fn numbers_keep_every_digit_in_double_precision() {
+        // f32 holds 100000.3 only to 1/128: 100000.296875.
+        let m = compose64("Translate 100000.3 -7e4 0.1");
+        assert_eq!(m.w_axis.x, 100000.3);
+        assert_eq!(m.w_axis.y, -70000.0);
+        assert_eq!(m.w_axis.z, 0.1);
+        assert_ne!(m.w_axis.x, f64::from(100000.3f32));
+        let m = compose64("UniformScale 1.000000001");
+        assert_eq!(m.x_axis.x, 1.000000001);
     }
 
     fn close(a: Mat4, b: Mat4) -> bool {

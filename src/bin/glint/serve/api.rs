@@ -139,7 +139,7 @@ fn camera_json(c: &Camera) -> Value {
             up,
             angle_deg,
         } => {
-            json!({"kind": "perspective", "eye": v3(center), "dir": v3(direction), "up": v3(up), "fov": angle_deg})
+            json!({"kind": "perspective", "eye": v3(center.as_vec3()), "dir": v3(direction), "up": v3(up), "fov": angle_deg})
         }
         Camera::Orthographic {
             center,
@@ -147,7 +147,7 @@ fn camera_json(c: &Camera) -> Value {
             up,
             size,
         } => {
-            json!({"kind": "orthographic", "eye": v3(center), "dir": v3(direction), "up": v3(up), "span": size})
+            json!({"kind": "orthographic", "eye": v3(center.as_vec3()), "dir": v3(direction), "up": v3(up), "span": size})
         }
     }
 }

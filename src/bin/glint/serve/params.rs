@@ -272,7 +272,7 @@ fn camera(q: &HashMap<String, String>, scene: &Camera) -> Result<Option<Camera>,
             ..
         } => (center, direction, up),
     };
-    let center = vec3(q, "eye")?.unwrap_or(c0);
+    let center = vec3(q, "eye")?.map_or(c0, |v| v.as_dvec3());
     let direction = vec3(q, "dir")?.unwrap_or(d0);
     let up = vec3(q, "up")?.unwrap_or(u0);
     let (d, u) = (direction.as_dvec3(), up.as_dvec3());
