@@ -7,7 +7,10 @@
 #         (tests/mitsuba/NAME_ref.exr, 128x128, 1024 spp): glint renders SPP samples per pixel
 #         (default 64), Mitsuba 3's scalar_rgb path tracer (scripts/mitsuba_twin.py) as many as fit
 #         in the same time (calibrated by a 16-sample run); both RMSEs against the reference, glint's
-#         samples/s and rays/s (Mitsuba reports no ray count), and the RMSE ratio.
+#         samples/s and rays/s (Mitsuba reports no ray count), and the RMSE ratio; then the same
+#         ratio with the reference's own noise taken out of both RMSEs (its variance, estimated
+#         from the two 64-sample Mitsuba renders NAME_seed1/2 scaled by 64/1024, subtracted from
+#         both squared RMSEs): the ratio against a converged image.
 #   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
 #         `pip install mitsuba` on first use)
 #   REPS  repetitions (default 3): medians are reported
@@ -26,8 +29,8 @@ if [ "${1:-}" = path ]; then
   cargo build --release --quiet --bin glint
   tmp=$(mktemp -d)
   echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-  echo "| scene | glint spp | glint s | glint samples/s | glint rays/s | glint RMSE | Mitsuba spp | Mitsuba s | Mitsuba samples/s | Mitsuba RMSE | RMSE glint/Mitsuba |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| scene | glint spp | glint s | glint samples/s | glint rays/s | glint RMSE | Mitsuba spp | Mitsuba s | Mitsuba samples/s | Mitsuba RMSE | RMSE glint/Mitsuba | reference noise | same, noise removed |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
   for name in cornell_box cornell_caustics mesh_sphere_light; do
     ./target/release/glint render "scenes/$name.txt" -o "$tmp/g.exr" --size 128 128 --integrator path \
       --spp "$spp" --threads 2 --quiet --stats-json "$tmp/g.json" >/dev/null
@@ -49,8 +52,12 @@ g, m = rmse(read(f"{tmp}/g.exr")), rmse(read(f"{tmp}/m.exr"))
 stats = json.load(open(f"{tmp}/g.json"))
 px = 128 * 128
 tg, tm = float(tg), float(tm)
+s1, s2 = read(f"tests/mitsuba/{name}_seed1.exr"), read(f"tests/mitsuba/{name}_seed2.exr")
+ref_var = float(((s1 - s2) ** 2).mean() / 2) * 64 / 1024
+clean = lambda e: max(e * e - ref_var, 0.0) ** 0.5
 print(f"| {name} | {spp} | {tg:.2f} | {px * int(spp) / tg:,.0f} | {stats['rays_total'] / tg:,.0f} | {g:.4f} "
-      f"| {mspp} | {tm:.2f} | {px * int(mspp) / tm:,.0f} | {m:.4f} | {g / m:.2f} |")
+      f"| {mspp} | {tm:.2f} | {px * int(mspp) / tm:,.0f} | {m:.4f} | {g / m:.2f} "
+      f"| {ref_var ** 0.5:.4f} | {clean(g) / clean(m):.2f} |")
 PY
   done
   echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -6,7 +6,7 @@
 //! across threads.
 
 use crate::common::*;
-use glint::integrator::{IntegratorKind, PathSettings, Strategy};
+use glint::integrator::{IntegratorKind, LightChoice, PathSettings, Strategy};
 use glint::job::Job;
 use glint::math::Vec3;
 use glint::sampler::SamplerKind;
@@ -416,6 +416,74 @@ fn mis_beats_each_strategy_alone_and_all_agree() {
         errors[0].1 < errors[1].1 && errors[0].1 < errors[2].1,
         "{errors:?}"
     );
+}
+
+/// Choosing lights by power or uniformly changes the noise, not the
+/// image: on a scene with lights of very different power (a small bright
+/// sphere, a large dim wall of two emitting triangles, a point light and
+/// a dim directional light), both choices' means agree with each other
+/// within 1.5% at 256 random samples, and each renders within the noise
+/// of a 1024-sample render made with the other choice (measured RMSE
+/// 0.0084 by power, 0.0090 uniformly; bound 0.02). A choice whose
+/// probability is not the one the sample is divided by (or the MIS weight
+/// uses) shifts the mean by far more.
+#[test]
+fn power_and_uniform_light_choice_converge_to_the_same_image() {
+    let dir = scratch("light_choice");
+    let scene = write_scene(
+        &dir,
+        "choice.txt",
+        "PerspectiveCamera { center 0 1.2 4 direction 0 -0.3 -1 up 0 1 0 angle 45 }\n\
+         Lights { numLights 2\n\
+           PointLight { position 1.5 2 1 color 0.8 0.7 0.6 }\n\
+           DirectionalLight { direction 0.3 -1 -0.5 color 0.05 0.05 0.06 }\n\
+         }\n\
+         Background { color 0 0 0 }\n\
+         Materials { numMaterials 4\n\
+           PhongMaterial { diffuseColor 0.5 0.5 0.5 }\n\
+           PhongMaterial { diffuseColor 0.2 0.2 0.2 specularColor 0.6 0.6 0.6 exponent 8 }\n\
+           PhongMaterial { diffuseColor 0 0 0 emittedColor 60 50 40 }\n\
+           PhongMaterial { diffuseColor 0 0 0 emittedColor 0.3 0.35 0.4 }\n\
+         }\n\
+         Group { numObjects 6\n\
+           MaterialIndex 0\n\
+           Triangle { vertex0 -3 0 -3 vertex1 -3 0 3 vertex2 3 0 3 }\n\
+           Triangle { vertex0 -3 0 -3 vertex1 3 0 3 vertex2 3 0 -3 }\n\
+           MaterialIndex 1 Sphere { center 0 0.5 0 radius 0.5 }\n\
+           MaterialIndex 2 Sphere { center -1 2 -1 radius 0.1 }\n\
+           MaterialIndex 3\n\
+           Triangle { vertex0 -2 0 -2 vertex1 2 0 -2 vertex2 2 2.5 -2 }\n\
+           Triangle { vertex0 -2 0 -2 vertex1 2 2.5 -2 vertex2 -2 2.5 -2 }\n\
+         }\n",
+    );
+    let size = 32;
+    let with = |light_choice, spp| {
+        render(
+            &scene,
+            size,
+            spp,
+            SamplerKind::Random,
+            PathSettings {
+                light_choice,
+                ..PathSettings::default()
+            },
+            2,
+        )
+    };
+    let power = with(LightChoice::Power, 256);
+    let uniform = with(LightChoice::Uniform, 256);
+    let (mp, mu) = (mean(&power), mean(&uniform));
+    let rel = ((mp - mu) / mu).abs().max_element();
+    eprintln!(
+        "means: power {mp}, uniform {mu} ({:.2}% apart)",
+        100.0 * rel
+    );
+    assert!(rel < 0.015, "means: power {mp} vs uniform {mu}");
+    let power_ref = with(LightChoice::Power, 1024);
+    let uniform_ref = with(LightChoice::Uniform, 1024);
+    let (e_power, e_uniform) = (rmse(&power, &uniform_ref), rmse(&uniform, &power_ref));
+    eprintln!("RMSE at 256 spp against the other choice at 1024: power {e_power:.4}, uniform {e_uniform:.4}");
+    assert!(e_power < 0.02 && e_uniform < 0.02, "{e_power} {e_uniform}");
 }
 
 /// Convergence on the Cornell box at 32×32 against a 1024-sample Sobol

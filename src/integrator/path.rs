@@ -2,9 +2,10 @@
 //! multiple importance sampling (Veach 1997, the power heuristic) between
 //! light sampling and BSDF sampling.
 //!
-//! At every vertex the path takes one light sample (a light chosen
-//! uniformly, a point or direction of it) and one BSDF sample (which lobe,
-//! which direction); the BSDF sample continues the path. Light found by
+//! At every vertex the path takes one light sample (a light chosen with
+//! probability proportional to its power, [`LightChoice`]; a point or
+//! direction of it) and one BSDF sample (which lobe, which direction); the
+//! BSDF sample continues the path. Light found by
 //! either strategy is weighted by the power heuristic of the two densities,
 //! so each path of light is counted once:
 //! - delta lights (point, directional) only through light sampling (a ray
@@ -47,7 +48,7 @@ use crate::scene::{Light, Material, Phong};
 use crate::shape::Shape;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
-use std::f32::consts::TAU;
+use std::f32::consts::{PI, TAU};
 
 /// Stream dimensions every path vertex takes: light choice (1-D), light
 /// point (2-D), lobe (1-D), direction (2-D), roulette (1-D).
@@ -68,6 +69,20 @@ pub enum Strategy {
     Bsdf,
 }
 
+/// How light sampling chooses which light to sample. Either is unbiased
+/// (every light that sends anything has a non-zero probability, and the
+/// sample is divided by it); they differ in noise.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightChoice {
+    /// Each light with probability proportional to an estimate of its
+    /// power ([`PathTracer::light_power`]): a bright small light is sampled
+    /// more often than a dim large wall of emitting triangles.
+    #[default]
+    Power,
+    /// Every light with the same probability.
+    Uniform,
+}
+
 /// The path tracer's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathSettings {
@@ -77,17 +92,21 @@ pub struct PathSettings {
     pub rr_depth: u32,
     /// Which strategies are used.
     pub strategy: Strategy,
+    /// How light sampling chooses a light.
+    pub light_choice: LightChoice,
     /// Where textures are looked up.
     pub texture_space: TextureSpace,
 }
 
 impl Default for PathSettings {
-    /// 64 bounces, roulette from the fourth, MIS, world-space textures.
+    /// 64 bounces, roulette from the fourth, MIS, lights chosen by power,
+    /// world-space textures.
     fn default() -> Self {
         Self {
             max_bounces: 64,
             rr_depth: 3,
             strategy: Strategy::Mis,
+            light_choice: LightChoice::Power,
             texture_space: TextureSpace::World,
         }
     }
@@ -113,6 +132,11 @@ pub struct PathTracer {
     emitter_of_prim: Vec<u32>,
     /// `emitters.len() + world.lights().len()`.
     light_count: usize,
+    /// Probability of choosing each light (emitters first, then the
+    /// scene's lights), summing to 1 (all 0 when no light sends anything).
+    pmf: Vec<f32>,
+    /// Running sums of `pmf`, the last exactly 1.
+    cdf: Vec<f32>,
 }
 
 /// A light sample: direction, radiance arriving divided by nothing, the
@@ -186,12 +210,89 @@ impl PathTracer {
             }
         }
         let light_count = emitters.len() + world.lights().len();
-        Self {
+        let mut tracer = Self {
             settings,
             emitters,
             emitter_of_prim,
             light_count,
+            pmf: Vec::new(),
+            cdf: Vec::new(),
+        };
+        let weights: Vec<f64> = (0..light_count)
+            .map(|k| match settings.light_choice {
+                LightChoice::Power => tracer.light_power(world, k) as f64,
+                LightChoice::Uniform => 1.0,
+            })
+            .map(|w| if w.is_finite() && w > 0.0 { w } else { 0.0 })
+            .collect();
+        let total: f64 = weights.iter().sum();
+        if total > 0.0 {
+            let mut run = 0.0;
+            for w in &weights {
+                run += w;
+                tracer.pmf.push((w / total) as f32);
+                tracer.cdf.push((run / total) as f32);
+            }
+            // The last light with any weight ends at exactly 1.
+            if let Some(k) = weights.iter().rposition(|&w| w > 0.0) {
+                for c in &mut tracer.cdf[k..] {
+                    *c = 1.0;
+                }
+            }
+        } else {
+            tracer.pmf = vec![0.0; light_count];
+            tracer.cdf = vec![1.0; light_count];
         }
+        tracer
+    }
+
+    /// An estimate of the power light `k` sends (emitters first, then the
+    /// scene's lights), in units of the channel mean of its colour, for
+    /// choosing lights: an emitting triangle `π·A·L`, an emitting sphere
+    /// `4π²r²·L`, an `AreaLight` its `power`, a point light `4π·I`, a
+    /// directional light `π·R²·E` over the disk of the world's bounding
+    /// sphere (radius `R`). Delta lights and surfaces are weighed on one
+    /// scale only roughly; any positive weights keep the estimate unbiased.
+    pub fn light_power(&self, world: &World, k: usize) -> f32 {
+        let mean = |c: Vec3| c.max(Vec3::ZERO).element_sum() / 3.0;
+        if let Some(e) = self.emitters.get(k) {
+            let (prim, size) = match *e {
+                Emitter::Triangle { prim, area } => (prim, PI * area),
+                Emitter::Sphere { prim } => match &world.prims()[prim as usize].shape {
+                    Shape::Sphere(s) => (prim, 4.0 * PI * PI * s.radius * s.radius),
+                    _ => return 0.0,
+                },
+            };
+            let m = world.prims()[prim as usize].material as usize;
+            return size * mean(max_emission(world.materials(), m, 0));
+        }
+        match world.lights().get(k - self.emitters.len()) {
+            Some(Light::Area { color, power, .. }) => power.max(0.0) * mean(*color),
+            Some(Light::Point { color, .. }) => 4.0 * PI * mean(*color),
+            Some(Light::Directional { color, .. }) => {
+                let b = world.bounds();
+                let r = if b.is_finite() && !b.is_empty() {
+                    0.5 * b.extent().length()
+                } else {
+                    1.0
+                };
+                PI * r * r * mean(*color)
+            }
+            None => 0.0,
+        }
+    }
+
+    /// The probability with which light sampling chooses light `k`
+    /// (emitters first, then the scene's lights).
+    pub fn light_probability(&self, k: usize) -> f32 {
+        self.pmf.get(k).copied().unwrap_or(0.0)
+    }
+
+    /// The light that `uc ∈ [0, 1)` chooses, and its probability.
+    fn choose_light(&self, uc: f32) -> Option<(usize, f32)> {
+        let k = self.cdf.partition_point(|&c| c <= uc);
+        let p = *self.pmf.get(k)?;
+        (p > 0.0).then_some((k, p))
     }
 
     /// How many lights light sampling chooses from (emitting primitives
@@ -232,7 +333,7 @@ impl PathTracer {
         let Some(e) = self.emitters.get(k as usize) else {
             return 0.0;
         };
-        let choose = 1.0 / self.light_count as f32;
+        let choose = self.light_probability(k as usize);
         match *e {
             Emitter::Triangle { area, .. } => {
                 let d = hit.point - p;
@@ -259,12 +360,7 @@ impl PathTracer {
         uc: f32,
         u: Vec2,
     ) -> Option<(LightSample, f32)> {
-        let n = self.light_count;
-        if n == 0 {
-            return None;
-        }
-        let k = ((uc * n as f32) as usize).min(n - 1);
-        let choose = 1.0 / n as f32;
+        let (k, choose) = self.choose_light(uc)?;
         if let Some(e) = self.emitters.get(k) {
             let (prim, y) = match *e {
                 Emitter::Triangle { prim, .. } => {
@@ -476,19 +572,18 @@ impl Integrator for PathTracer {
             if depth >= s.max_bounces {
                 break;
             }
-            // This vertex's dimensions, taken whether used or not.
-            let u_light_choice = stream.next_1d();
-            let u_light = stream.next_2d();
-            let u_lobe = stream.next_1d();
-            let u_dir = stream.next_2d();
-            let u_rr = stream.next_1d();
+            // This vertex's dimensions, taken whether used or not, and
+            // computed only where used: light choice, light point, lobe,
+            // direction, roulette.
+            let dim = stream.dimension();
+            stream.skip_n(DIMS_PER_VERTEX);
 
             let bsdf = Bsdf::from_phong(&m, h.normal);
             let wo = -ray.dir.normalize();
             let mut spawn = Spawn::leaving(h.surface_point(), h.prim);
             if s.strategy != Strategy::Bsdf && !bsdf.is_delta() {
                 if let Some((ls, choose)) =
-                    self.sample_light(world, h.point, u_light_choice, u_light)
+                    self.sample_light(world, h.point, stream.get_1d(dim), stream.get_2d(dim + 1))
                 {
                     let f = bsdf.f(wo, ls.wi);
                     let cos = ls.wi.dot(h.normal).abs();
@@ -519,7 +614,13 @@ impl Integrator for PathTracer {
                     }
                 }
             }
-            let Some(bs) = bsdf.sample_f(wo, u_lobe, u_dir) else {
+            // One lobe needs no choice.
+            let u_lobe = if bsdf.lobes().len() > 1 {
+                stream.get_1d(dim + 2)
+            } else {
+                0.0
+            };
+            let Some(bs) = bsdf.sample_f(wo, u_lobe, stream.get_2d(dim + 3)) else {
                 break;
             };
             let weight = bs.weight(h.normal);
@@ -530,7 +631,7 @@ impl Integrator for PathTracer {
             depth += 1;
             if depth > s.rr_depth {
                 let survive = beta.max_element().min(0.95);
-                if u_rr >= survive {
+                if stream.get_1d(dim + 4) >= survive {
                     break;
                 }
                 beta /= survive;
@@ -551,6 +652,111 @@ impl Integrator for PathTracer {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A world of two emitting triangles (a 2 × 1 rectangle of radiance
+    /// 1), a small bright sphere (radius 0.1, radiance 40), a dark
+    /// emitter, and the scene's lights: a point light, a directional light
+    /// and an `AreaLight`.
+    fn lights_world() -> World {
+        let text = "PerspectiveCamera { center 0 1 5 direction 0 0 -1 up 0 1 0 angle 40 }\n\
+            Lights { numLights 3\n\
+              PointLight { position 0 3 0 color 2 2 2 }\n\
+              DirectionalLight { direction 0 -1 0 color 0.5 0.5 0.5 }\n\
+              AreaLight { quad { corner -1 4 -1 edge1 2 0 0 edge2 0 0 2 } color 1 1 1 power 30 }\n\
+            }\n\
+            Background { color 0 0 0 }\n\
+            Materials { numMaterials 3\n\
+              PhongMaterial { diffuseColor 0 0 0 emittedColor 1 1 1 }\n\
+              PhongMaterial { diffuseColor 0 0 0 emittedColor 40 40 40 }\n\
+              PhongMaterial { diffuseColor 0.5 0.5 0.5 }\n\
+            }\n\
+            Group { numObjects 4\n\
+              MaterialIndex 0\n\
+              Triangle { vertex0 -1 0 -2 vertex1 1 0 -2 vertex2 1 1 -2 }\n\
+              Triangle { vertex0 -1 0 -2 vertex1 1 1 -2 vertex2 -1 1 -2 }\n\
+              MaterialIndex 1 Sphere { center 0 2 0 radius 0.1 }\n\
+              MaterialIndex 2 Sphere { center 0 0 0 radius 0.5 }\n\
+            }\n";
+        let scene = crate::format::parse_scene(text, std::path::Path::new("lights.txt")).unwrap();
+        World::build(&scene, crate::world::BuildOptions::default())
+    }
+
+    /// Choosing lights by power: the probabilities sum to 1, follow the
+    /// power estimates (the bright small sphere of power 4π²·0.01·40 is
+    /// chosen more often than the dim triangles of π·1·1 each), the choice
+    /// made by `uc` over a fine grid picks each light with its
+    /// probability, and `pdf_light` reports the probability it chooses
+    /// with. Uniform choice gives every light 1/n.
+    #[test]
+    fn lights_are_chosen_by_power_with_the_probability_reported() {
+        let world = lights_world();
+        for choice in [LightChoice::Power, LightChoice::Uniform] {
+            let settings = PathSettings {
+                light_choice: choice,
+                ..PathSettings::default()
+            };
+            let pt = PathTracer::new(&world, settings);
+            let n = pt.light_count();
+            assert_eq!(n, 3 + 3, "two triangles, a sphere and three lights");
+            let probs: Vec<f32> = (0..n).map(|k| pt.light_probability(k)).collect();
+            let sum: f32 = probs.iter().sum();
+            assert!((sum - 1.0).abs() < 1e-6, "{choice:?}: {probs:?}");
+            let powers: Vec<f32> = (0..n).map(|k| pt.light_power(&world, k)).collect();
+            let total: f32 = powers.iter().sum();
+            for k in 0..n {
+                let want = match choice {
+                    LightChoice::Power => powers[k] / total,
+                    LightChoice::Uniform => 1.0 / n as f32,
+                };
+                assert!((probs[k] - want).abs() < 1e-6, "{choice:?} {k}: {probs:?}");
+            }
+            if choice == LightChoice::Power {
+                assert!((powers[0] - PI).abs() < 1e-4, "{powers:?}");
+                let sphere = 4.0 * PI * PI * 0.01 * 40.0;
+                assert!((powers[2] - sphere).abs() < 1e-3 * sphere, "{powers:?}");
+                assert!((powers[5] - 30.0).abs() < 1e-4, "{powers:?}");
+                assert!(probs[2] > probs[0], "{probs:?}");
+            }
+            // The choice by a fine grid of `uc` picks each light with its
+            // probability.
+            let m = 100_000;
+            let mut count = vec![0u32; n];
+            for i in 0..m {
+                let (k, p) = pt.choose_light((i as f32 + 0.5) / m as f32).unwrap();
+                assert_eq!(p, probs[k]);
+                count[k] += 1;
+            }
+            for k in 0..n {
+                let f = count[k] as f32 / m as f32;
+                assert!(
+                    (f - probs[k]).abs() < 1e-4,
+                    "{choice:?} {k}: {f} vs {}",
+                    probs[k]
+                );
+            }
+            // pdf_light of a point of the sphere includes its probability
+            // (the world is in rendering space: the sphere as built).
+            let Shape::Sphere(sphere) = &world.prims()[2].shape else {
+                panic!("primitive 2 is the emitting sphere");
+            };
+            let (c, r) = (sphere.center, sphere.radius);
+            let from = c + Vec3::new(0.0, -2.0, 2.0);
+            let y = sample_sphere_cone(from, c, r, Vec2::splat(0.3)).unwrap();
+            let hit = Hit {
+                t: 1.0,
+                point: y.p,
+                error: y.error,
+                normal: y.n,
+                shading_normal: y.n,
+                prim: 2,
+                material: 1,
+                instance: 0,
+            };
+            let want = probs[2] * cone_pdf(from, c, r);
+            let got = pt.pdf_light(&world, from, &hit);
+            assert!((got - want).abs() < 1e-5 * want, "{got} vs {want}");
+        }
+    }
 
     #[test]
     fn power_heuristic_weights_sum_to_one() {

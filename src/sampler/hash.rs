@@ -14,7 +14,14 @@ pub fn mix64(mut z: u64) -> u64 {
 /// Hash of a sequence of words, each mixed in turn (order matters).
 #[inline]
 pub fn hash(words: &[u64]) -> u64 {
-    words.iter().fold(0x9e37_79b9_7f4a_7c15, |h, &w| {
+    hash_from(0x9e37_79b9_7f4a_7c15, words)
+}
+
+/// [`hash`] continued: `hash_from(hash(a), b) == hash(a ++ b)`, so a
+/// prefix shared by many hashes (seed and pixel) is mixed once.
+#[inline]
+pub fn hash_from(start: u64, words: &[u64]) -> u64 {
+    words.iter().fold(start, |h, &w| {
         mix64(h ^ w.wrapping_mul(0xd6e8_feb8_6659_fd93))
     })
 }
@@ -85,6 +92,14 @@ mod tests {
                     seen[j as usize] = true;
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_continued_hash_is_the_hash_of_the_whole() {
+        let words = [7u64, 0xdead_beef_0000_0001, 3, 1];
+        for k in 0..=words.len() {
+            assert_eq!(hash_from(hash(&words[..k]), &words[k..]), hash(&words));
         }
     }
 

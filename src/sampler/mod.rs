@@ -13,7 +13,7 @@ mod hash;
 mod sobol;
 mod split;
 
-pub use hash::{hash, mix64, permute, unit_f32};
+pub use hash::{hash, hash_from, mix64, permute, unit_f32};
 pub use split::Split2d;
 
 use crate::math::Vec2;
@@ -30,7 +30,8 @@ pub enum SamplerKind {
     /// One random point in each cell of the `kx × ky` grid (stratified).
     Jittered,
     /// Owen-scrambled Sobol points: stratified at every power-of-two prefix
-    /// and in every elementary interval shape. The default for stochastic use.
+    /// and in every elementary interval shape; the pixel position and the
+    /// first 2-D value after it jointly in 4-D. The default for stochastic use.
     Sobol,
 }
 
@@ -120,9 +121,11 @@ impl Sampler {
     /// The stream of sample `index` of pixel `(i, j)` (image coordinates,
     /// `j` up), at dimension 0.
     pub fn stream(&self, pixel: (u32, u32), index: u32) -> SampleStream<'_> {
+        let pixel_key = (pixel.0 as u64) | (pixel.1 as u64) << 32;
         SampleStream {
             sampler: self,
-            pixel_key: (pixel.0 as u64) | (pixel.1 as u64) << 32,
+            pixel_key,
+            prefix: self.prefix(pixel_key),
             index,
             dim: 0,
         }
@@ -133,17 +136,27 @@ impl Sampler {
     /// higher dimensions are used; their values are random-quality (the
     /// stratification of `spp`-sample sets does not apply).
     pub fn stream_for_key(&self, key: u64) -> SampleStream<'_> {
+        let pixel_key = key ^ 0xa5a5_a5a5_0000_0000;
         SampleStream {
             sampler: self,
-            pixel_key: key ^ 0xa5a5_a5a5_0000_0000,
+            pixel_key,
+            prefix: self.prefix(pixel_key),
             index: u32::MAX,
             dim: 1,
         }
     }
 
-    /// Value of 2-D dimension `dim` for the stream's pixel and index.
+    /// `hash(&[seed, pixel_key])`: the start of every hash of a pixel's
+    /// values, mixed once per stream ([`hash_from`] continues it).
     #[inline]
-    fn value_2d(&self, pixel_key: u64, index: u32, dim: u32) -> Vec2 {
+    fn prefix(&self, pixel_key: u64) -> u64 {
+        hash(&[self.seed, pixel_key])
+    }
+
+    /// Value of 2-D dimension `dim` for the stream's pixel (`prefix`, see
+    /// [`prefix`](Self::prefix)) and index.
+    #[inline]
+    fn value_2d(&self, prefix: u64, index: u32, dim: u32) -> Vec2 {
         // A key stream (index u32::MAX) is not part of any stratified set.
         let kind = if index == u32::MAX {
             SamplerKind::Random
@@ -155,7 +168,7 @@ impl Sampler {
         if let (SamplerKind::Uniform(layout), 0) = (kind, dim) {
             return self.grid_point(layout, index % self.spp);
         }
-        let h = hash(&[self.seed, pixel_key, dim as u64]);
+        let h = hash_from(prefix, &[dim as u64]);
         match kind {
             SamplerKind::Random => Vec2::new(
                 unit_f32(hash(&[h, index as u64, 0])),
@@ -173,6 +186,19 @@ impl Sampler {
                     ((cx + jx) / kx as f32).min(ONE_BELOW),
                     ((cy + jy) / ky as f32).min(ONE_BELOW),
                 )
+            }
+            SamplerKind::Sobol if dim == 1 => {
+                // Sobol dimensions 2 and 3 of the pixel position's point
+                // (the same index shuffle as dimension 0's): the pixel
+                // position and this first 2-D decision after it (the lens
+                // point of a thin-lens camera) are stratified jointly. With
+                // independent shuffles, as further dimensions are, the
+                // pairing of pixel and lens positions is random, and so is
+                // the coverage of a defocused edge.
+                let h0 = hash_from(prefix, &[0]);
+                let (x, y) =
+                    sobol::point_2d_upper(index, h0 as u32, (h >> 32) as u32, mix64(h) as u32);
+                Vec2::new(hash::unit_from_u32(x), hash::unit_from_u32(y))
             }
             SamplerKind::Sobol => {
                 let (x, y) = sobol::point_2d(index, h as u32, (h >> 32) as u32, mix64(h) as u32);
@@ -195,8 +221,8 @@ impl Sampler {
     }
 
     /// Value of 1-D dimension `dim`.
-    fn value_1d(&self, pixel_key: u64, index: u32, dim: u32) -> f32 {
-        let h = hash(&[self.seed, pixel_key, dim as u64, 1]);
+    fn value_1d(&self, prefix: u64, index: u32, dim: u32) -> f32 {
+        let h = hash_from(prefix, &[dim as u64, 1]);
         let kind = if index == u32::MAX {
             SamplerKind::Random
         } else {
@@ -242,6 +268,8 @@ const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 pub struct SampleStream<'a> {
     sampler: &'a Sampler,
     pixel_key: u64,
+    /// `hash(&[seed, pixel_key])`.
+    prefix: u64,
     index: u32,
     dim: u32,
 }
@@ -249,14 +277,28 @@ pub struct SampleStream<'a> {
 impl SampleStream<'_> {
     /// The next 2-D value in `[0, 1)²` (the first one is the pixel position).
     pub fn next_2d(&mut self) -> Vec2 {
-        let v = self.sampler.value_2d(self.pixel_key, self.index, self.dim);
+        let v = self.get_2d(self.dim);
         self.dim += 1;
         v
     }
 
+    /// The 2-D value of dimension `dim` (taken or not): for an integrator
+    /// that reserves a block of dimensions ([`skip_n`](Self::skip_n)) and
+    /// computes only those it uses.
+    #[inline]
+    pub fn get_2d(&self, dim: u32) -> Vec2 {
+        self.sampler.value_2d(self.prefix, self.index, dim)
+    }
+
+    /// The 1-D value of dimension `dim`, as [`get_2d`](Self::get_2d).
+    #[inline]
+    pub fn get_1d(&self, dim: u32) -> f32 {
+        self.sampler.value_1d(self.prefix, self.index, dim)
+    }
+
     /// The next 1-D value in `[0, 1)`.
     pub fn next_1d(&mut self) -> f32 {
-        let v = self.sampler.value_1d(self.pixel_key, self.index, self.dim);
+        let v = self.get_1d(self.dim);
         self.dim += 1;
         v
     }
@@ -265,6 +307,12 @@ impl SampleStream<'_> {
     /// hoisted [`Sampler::fixed_offset`]).
     pub fn skip(&mut self) {
         self.dim += 1;
+    }
+
+    /// Skips the next `n` dimensions (read later with [`get_1d`](Self::get_1d)
+    /// and [`get_2d`](Self::get_2d) where needed).
+    pub fn skip_n(&mut self, n: u32) {
+        self.dim += n;
     }
 
     /// How many dimensions have been taken so far.

@@ -9,6 +9,10 @@
 //! sample index itself Owen-scrambled by a different seed per dimension
 //! ("padding"), which decorrelates them without needing high Sobol
 //! dimensions (which are poorly stratified in 2-D projections anyway).
+//! The one exception is the first 2-D value after the pixel position: it
+//! takes Sobol dimensions 2 and 3 of the pixel's own point
+//! ([`point_2d_upper`]), so that pixel position and lens point (or
+//! whatever comes first) are stratified together in 4-D.
 
 /// Sobol dimension 0: the van der Corput sequence, i.e. the bits of `i`
 /// reversed into a 32-bit binary fraction. (The definition, for tests:
@@ -71,6 +75,103 @@ static DIM1_REV_BYTES: [[u32; 256]; 4] = {
     }
     t
 };
+
+/// Direction numbers of a Sobol dimension as 32-bit binary fractions: the
+/// primitive polynomial of degree `s` with inner coefficients `a` (bit
+/// `s − 1 − j` is the coefficient of `x^(s−j)`) and initial odd integers
+/// `m` (Joe and Kuo's `new-joe-kuo-6.21201` table, the source of every
+/// common Sobol implementation). `v_k = m_k / 2^(k+1)` for the first `s`,
+/// then `v_k = v_(k−s) ⊕ v_(k−s)/2^s ⊕ ⨁_j a_j v_(k−j)`.
+const fn direction_numbers(s: usize, a: u32, m: [u32; 3]) -> [u32; 32] {
+    let mut v = [0u32; 32];
+    let mut k = 0;
+    while k < 32 {
+        if k < s {
+            v[k] = m[k] << (31 - k);
+        } else {
+            let mut x = v[k - s] ^ (v[k - s] >> s);
+            let mut j = 1;
+            while j < s {
+                if (a >> (s - 1 - j)) & 1 != 0 {
+                    x ^= v[k - j];
+                }
+                j += 1;
+            }
+            v[k] = x;
+        }
+        k += 1;
+    }
+    v
+}
+
+/// Sobol dimensions 2 (`x² + x + 1`, m = 1, 3) and 3 (`x³ + x + 1`,
+/// m = 1, 3, 1).
+const DIRECTIONS_2_3: [[u32; 32]; 2] = [
+    direction_numbers(2, 1, [1, 3, 0]),
+    direction_numbers(3, 1, [1, 3, 1]),
+];
+
+/// Sobol dimension `d` (2 or 3) of index `i`, bit by bit (builds the
+/// tables; the definition, for tests).
+const fn sobol_upper_bits(d: usize, mut i: u32) -> u32 {
+    let v = &DIRECTIONS_2_3[d - 2];
+    let mut r = 0u32;
+    let mut k = 0;
+    while i != 0 {
+        if i & 1 != 0 {
+            r ^= v[k];
+        }
+        i >>= 1;
+        k += 1;
+    }
+    r
+}
+
+/// `UPPER_REV_BYTES[d − 2][k][b]`: [`sobol_upper_bits`] of byte `b` at byte
+/// `k` of the index, bits reversed, as [`DIM1_REV_BYTES`] (8 KB).
+static UPPER_REV_BYTES: [[[u32; 256]; 4]; 2] = {
+    let mut t = [[[0u32; 256]; 4]; 2];
+    let mut d = 0;
+    while d < 2 {
+        let mut k = 0;
+        while k < 4 {
+            let mut b = 0;
+            while b < 256 {
+                t[d][k][b] = sobol_upper_bits(d + 2, (b as u32) << (8 * k)).reverse_bits();
+                b += 1;
+            }
+            k += 1;
+        }
+        d += 1;
+    }
+    t
+};
+
+/// Sobol dimension `2 + d` (`d` 0 or 1) of `i`, bits reversed.
+#[inline]
+fn sobol_upper_reversed(d: usize, i: u32) -> u32 {
+    let t = &UPPER_REV_BYTES[d];
+    t[0][(i & 0xff) as usize]
+        ^ t[1][(i >> 8 & 0xff) as usize]
+        ^ t[2][(i >> 16 & 0xff) as usize]
+        ^ t[3][(i >> 24) as usize]
+}
+
+/// Sobol dimensions 2 and 3 of the point `index` whose dimensions 0 and 1
+/// [`point_2d`] gives for the same `index` and `shuffle`, Owen-scrambled by
+/// `sx` and `sy`. Together the four coordinates are a scrambled Sobol
+/// (t, 4)-sequence with t = 3: every prefix of 2^m points puts exactly 8
+/// in each elementary box of volume 2^(3−m), so a pixel's positions and
+/// the next 2-D decision (a lens point) are stratified jointly, not only
+/// each on its own.
+#[inline]
+pub fn point_2d_upper(index: u32, shuffle: u32, sx: u32, sy: u32) -> (u32, u32) {
+    let i = owen_scramble(index, shuffle);
+    (
+        laine_karras(sobol_upper_reversed(0, i), sx).reverse_bits(),
+        laine_karras(sobol_upper_reversed(1, i), sy).reverse_bits(),
+    )
+}
 
 /// Laine and Karras's hash, improved by Burley: a permutation of `x` in which
 /// each bit depends only on the bits below it. Applied to bit-reversed values
@@ -166,6 +267,68 @@ mod tests {
             );
             assert_eq!(point_2d(index, shuffle, sx, sy), want);
             assert_eq!(scrambled_dim0(i, sx), want.0);
+        }
+    }
+
+    /// Dimensions 0 to 3 of the same index form a (3, 4)-sequence: the
+    /// first 2^m points (any shuffle and scrambles) put exactly 8 points in
+    /// every elementary box `2^-a0 × 2^-a1 × 2^-a2 × 2^-a3` with
+    /// `a0 + a1 + a2 + a3 = m − 3`. Wrong direction numbers break it.
+    #[test]
+    fn four_dimensions_form_a_3_4_sequence() {
+        for (shuffle, s) in [(0u32, [0u32; 4]), (0x9e37, [5, 0xabc, 0x1234_5678, 77])] {
+            for m in 3..=10u32 {
+                let n = 1u32 << m;
+                let pts: Vec<[u32; 4]> = (0..n)
+                    .map(|i| {
+                        let (x0, x1) = point_2d(i, shuffle, s[0], s[1]);
+                        let (x2, x3) = point_2d_upper(i, shuffle, s[2], s[3]);
+                        [x0, x1, x2, x3]
+                    })
+                    .collect();
+                let k = m - 3;
+                for a0 in 0..=k {
+                    for a1 in 0..=k - a0 {
+                        for a2 in 0..=k - a0 - a1 {
+                            let a = [a0, a1, a2, k - a0 - a1 - a2];
+                            let mut count = vec![0u32; 1 << k];
+                            for p in &pts {
+                                let mut cell = 0usize;
+                                for d in 0..4 {
+                                    let c = if a[d] == 0 { 0 } else { p[d] >> (32 - a[d]) };
+                                    cell = cell << a[d] | c as usize;
+                                }
+                                count[cell] += 1;
+                            }
+                            assert!(count.iter().all(|&c| c == 8), "m={m} a={a:?}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The upper dimensions' first values in plain index order (Joe and
+    /// Kuo's, as SciPy lists them in Gray-code order: 0, .5, .25, .75,
+    /// .625, .125, .875, .375 for dimension 2), and the tables are the bit
+    /// loop.
+    #[test]
+    fn upper_dimensions_match_known_values() {
+        let d2 = [0.0, 0.5, 0.75, 0.25, 0.375, 0.875, 0.625, 0.125];
+        let d3 = [0.0, 0.5, 0.75, 0.25, 0.125, 0.625, 0.875, 0.375];
+        for i in 0..8u32 {
+            let f = |d| sobol_upper_bits(d, i) as f64 / 4294967296.0;
+            assert_eq!((f(2), f(3)), (d2[i as usize], d3[i as usize]), "index {i}");
+        }
+        let mut x = 0x9e37_79b9u32;
+        for _ in 0..10_000 {
+            x = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            for d in 0..2 {
+                assert_eq!(
+                    sobol_upper_reversed(d, x).reverse_bits(),
+                    sobol_upper_bits(d + 2, x)
+                );
+            }
         }
     }
 

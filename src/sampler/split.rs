@@ -16,7 +16,8 @@ use crate::math::Vec2;
 #[derive(Clone, Debug)]
 pub struct Split2d {
     sampler: Sampler,
-    pixel_key: u64,
+    /// The hash prefix of the seed and the (possibly re-keyed) pixel.
+    prefix: u64,
     base: u32,
     dim: u32,
     k: u32,
@@ -50,9 +51,10 @@ impl SampleStream<'_> {
         } else {
             self.pixel_key
         };
+        let sampler = Sampler::new(kind, s.spp.saturating_mul(n), s.seed);
         Split2d {
-            sampler: Sampler::new(kind, s.spp.saturating_mul(n), s.seed),
-            pixel_key: key,
+            prefix: sampler.prefix(key),
+            sampler,
             base,
             dim,
             k: 0,
@@ -70,7 +72,7 @@ impl Iterator for Split2d {
         }
         let v = self
             .sampler
-            .value_2d(self.pixel_key, self.base + self.k, self.dim);
+            .value_2d(self.prefix, self.base + self.k, self.dim);
         self.k += 1;
         Some(v)
     }
