@@ -42,10 +42,10 @@ pub(crate) struct RayData {
     pub ray: Ray,
     /// `origin · inv` per axis, splatted: a slab distance is then one fused
     /// multiply-subtract, `plane · inv − origin · inv`.
-    oi: [Lanes; 3],
+    pub(crate) oi: [Lanes; 3],
     /// `1 / dir` per axis, splatted, with tiny components clamped (see
     /// [`safe_inverse`]).
-    inv: [Lanes; 3],
+    pub(crate) inv: [Lanes; 3],
     /// Index into `Node::planes` of the near and far plane per axis (the
     /// ray's octant).
     near: [usize; 3],
@@ -99,10 +99,17 @@ fn safe_inverse(d: Vec3) -> Vec3 {
 }
 
 impl RayData {
+    /// A ray's `1 / dir` (clamped, see [`safe_inverse`]) and `origin ·
+    /// inv`, the values [`new`](Self::new) splats.
+    #[inline(always)]
+    pub(crate) fn inv_oi(ray: &Ray) -> (Vec3, Vec3) {
+        let inv = safe_inverse(ray.dir);
+        (inv, ray.origin * inv)
+    }
+
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
-        let inv = safe_inverse(ray.dir);
-        let oi = ray.origin * inv;
+        let (inv, oi) = Self::inv_oi(ray);
         // The sign bit of `1 / d`: set for `d < 0`, for `d = −0` (`−∞`) and
         // for `d = −∞` (`−0`), as `inv < 0 || (inv == 0 && d < 0)` was; a NaN
         // direction makes every slab NaN, whichever plane is near.
@@ -196,8 +203,11 @@ impl RayData {
     /// NaN, a NaN slab is always a first operand, and a NaN result of the
     /// inner pair is again a first operand (`tmin` and `tmax` are never
     /// NaN), so such a slab is ignored.
+    ///
+    /// With `M`, the distances of the boxes missed are `+inf` (the packet
+    /// walk takes their minimum over its rays).
     #[inline(always)]
-    fn boxes<B: BoxTest, const O: usize, const I: bool>(
+    pub(crate) fn boxes<B: BoxTest, const O: usize, const I: bool, const M: bool>(
         &self,
         bt: B,
         n: &Node,
@@ -206,7 +216,7 @@ impl RayData {
     ) -> (u32, Lanes) {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = bt.avx() {
-            return self.boxes_avx::<O, I>(avx, n, tmin, tmax);
+            return self.boxes_avx::<O, I, M>(avx, n, tmin, tmax);
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = bt;
@@ -218,14 +228,19 @@ impl RayData {
         let tfx = p[far[0]].mul_sub(self.inv[0], self.oi[0]);
         let tfy = p[far[1]].mul_sub(self.inv[1], self.oi[1]);
         let tfz = p[far[2]].mul_sub(self.inv[2], self.oi[2]);
-        if I {
+        let (mask, tn) = if I {
             let tn = tnx.max_bits(tny).max_bits(tnz.max_bits(tmin));
             let tf = tfx.min_bits(tfy).min_bits(tfz.min_bits(tmax));
-            return (tn.le_mask_bits(tf), tn);
+            (tn.le_mask_bits(tf), tn)
+        } else {
+            let tn = tnx.max(tny).max(tnz.max(tmin));
+            let tf = tfx.min(tfy).min(tfz.min(tmax));
+            (tn.le_mask(tf), tn)
+        };
+        if M {
+            return (mask, tn.or_inf_outside(mask));
         }
-        let tn = tnx.max(tny).max(tnz.max(tmin));
-        let tf = tfx.min(tfy).min(tfz.min(tmax));
-        (tn.le_mask(tf), tn)
+        (mask, tn)
     }
 
     /// [`boxes`](Self::boxes) with 256-bit AVX operations: the same
@@ -242,7 +257,7 @@ impl RayData {
     /// `_mm256_*` intrinsics then inline into that AVX2 function.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn boxes_avx<const O: usize, const I: bool>(
+    fn boxes_avx<const O: usize, const I: bool, const M: bool>(
         &self,
         _: Avx,
         n: &Node,
@@ -285,11 +300,21 @@ impl RayData {
                 // `tn <= tf` is `!(tn > tf)`: AVX2 has only the latter.
                 let out = _mm256_castsi256_ps(_mm256_cmpgt_epi32(tn, tf));
                 let mask = !(_mm256_movemask_ps(out) as u32) & 0xff;
-                return (mask, std::mem::transmute::<__m256i, Lanes>(tn));
+                let mut tn = _mm256_castsi256_ps(tn);
+                if M {
+                    tn = _mm256_blendv_ps(tn, _mm256_set1_ps(f32::INFINITY), out);
+                }
+                return (mask, std::mem::transmute::<__m256, Lanes>(tn));
             }
             let tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, ld(&tmin)));
             let tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, ld(&tmax)));
-            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(tn, tf)) as u32;
+            let hit = _mm256_cmp_ps::<_CMP_LE_OS>(tn, tf);
+            let mask = _mm256_movemask_ps(hit) as u32;
+            let tn = if M {
+                _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), tn, hit)
+            } else {
+                tn
+            };
             (mask, std::mem::transmute::<__m256, Lanes>(tn))
         }
     }
@@ -297,7 +322,7 @@ impl RayData {
 
 impl LeafRay {
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &Ray) -> Self {
         let wt = WatertightRay::new(ray);
         LeafRay {
             wt,
@@ -323,7 +348,7 @@ impl LeafRay {
     /// the test for them (the any-hit walk ignores them; they are dead code
     /// there once inlined).
     #[inline(always)]
-    fn triangles<B: BoxTest>(
+    pub(crate) fn triangles<B: BoxTest>(
         &self,
         bt: B,
         b: &Tri4,
@@ -436,7 +461,7 @@ fn lanes_of(b: &Tri4, id: u32) -> u32 {
 /// mask: a separate prefetch pass cost the any-hit walk 7% more
 /// instructions).
 #[inline(always)]
-fn prefetch_child(nodes: &[Node], tris: &[Tri4], c: u32) {
+pub(crate) fn prefetch_child(nodes: &[Node], tris: &[Tri4], c: u32) {
     if !is_leaf(c) {
         if let Some(n) = nodes.get(c as usize) {
             prefetch(n);
@@ -512,6 +537,78 @@ pub(crate) struct Closest {
     pub bary: Option<[f32; 3]>,
 }
 
+/// The upper end of the range a leaf tests once `best` is found: `tmax`
+/// itself (`best` is the closest so far, at `tmax`) taken inclusively, so
+/// that a hit at exactly the same `t` is seen and [`closer`] can break the
+/// tie. Hits are at `t > tmin ≥ −∞` and finite, and the next float above a
+/// finite `t` is the bit pattern one up for `t > 0` (`+inf` above the
+/// largest finite value); for `t ≤ 0` (a negative `tmin`) `next_up` is
+/// exact too.
+#[inline(always)]
+pub(crate) fn test_tmax(best: &Option<Closest>, tmax: f32) -> f32 {
+    if best.is_some() {
+        tmax.next_up()
+    } else {
+        tmax
+    }
+}
+
+/// Whether a hit `(t, id)` replaces `best` (at `tmax`): nearer, or as near
+/// with a smaller item id. The rule makes the closest hit a function of
+/// the ray and the set of items alone, not of the order the walk meets
+/// them in (brute force's order, by id, gives the same answer): a packet
+/// walk, which visits a ray's nodes in a different order than that ray's
+/// own walk, returns the very same hit.
+#[inline(always)]
+pub(crate) fn closer(best: &Option<Closest>, tmax: f32, t: f32, id: u32) -> bool {
+    match best {
+        None => true,
+        Some(b) => t < tmax || (t == tmax && id < b.id),
+    }
+}
+
+/// One leaf block for a closest-hit walk: its triangles (in `(tmin,
+/// test_tmax]`), then its other items, each kept by [`closer`]; `tmax`
+/// shrinks to the best hit's `t`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn leaf_block<B: BoxTest, F: Fallback + ?Sized>(
+    bt: B,
+    lr: &LeafRay,
+    b: &Tri4,
+    fallback: &F,
+    ray: &Ray,
+    tmin: f32,
+    tmax: &mut f32,
+    best: &mut Option<Closest>,
+) {
+    let (mut mask, t, bary) = lr.triangles(bt, b, tmin, test_tmax(best, *tmax), NO_ITEM);
+    while mask != 0 {
+        let i = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        if closer(best, *tmax, t[i], b.ids[i]) {
+            *tmax = t[i];
+            *best = Some(Closest {
+                t: t[i],
+                id: b.ids[i],
+                bary: Some([bary[0][i], bary[1][i], bary[2][i]]),
+            });
+        }
+    }
+    if b.has_other() {
+        for &id in &b.ids {
+            if id != NO_ITEM && id & OTHER != 0 {
+                let id = id & !OTHER;
+                let hit = fallback.intersect(id, ray, tmin, test_tmax(best, *tmax));
+                if let Some(t) = hit.filter(|&t| closer(best, *tmax, t, id)) {
+                    *tmax = t;
+                    *best = Some(Closest { t, id, bary: None });
+                }
+            }
+        }
+    }
+}
+
 /// The closest hit ([`Closest`]), with an `N`-entry stack ([`SHALLOW`]
 /// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
 /// AVX2 copy compiles it with AVX2.
@@ -553,7 +650,7 @@ pub(crate) fn closest<
             if S::ENABLED {
                 n_nodes += 1;
             }
-            let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(tmax));
+            let (mask, dist) = rd.boxes::<_, O, I, false>(bt, node, tmin4, Lanes::splat(tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
@@ -569,30 +666,7 @@ pub(crate) fn closest<
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                let (mut mask, t, bary) = lr.triangles(bt, b, tmin, tmax, NO_ITEM);
-                while mask != 0 {
-                    let i = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if t[i] < tmax {
-                        tmax = t[i];
-                        best = Some(Closest {
-                            t: t[i],
-                            id: b.ids[i],
-                            bary: Some([bary[0][i], bary[1][i], bary[2][i]]),
-                        });
-                    }
-                }
-                if b.has_other() {
-                    for &id in &b.ids {
-                        if id != NO_ITEM && id & OTHER != 0 {
-                            let id = id & !OTHER;
-                            if let Some(t) = fallback.intersect(id, &rd.ray, tmin, tmax) {
-                                tmax = t;
-                                best = Some(Closest { t, id, bary: None });
-                            }
-                        }
-                    }
-                }
+                leaf_block(bt, lr, b, fallback, &rd.ray, tmin, &mut tmax, &mut best);
             }
         }
         // Pop the nearest pending child that can still hold a closer hit.
@@ -654,7 +728,7 @@ pub(crate) fn any<
             }
             // No ordering: any occluder ends the walk, and sorting costs
             // more than it saves for shadow rays.
-            let (mut mask, _) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
+            let (mut mask, _) = rd.boxes::<_, O, I, false>(bt, node, tmin4, tmax4);
             if mask != 0 {
                 cur = node.child[mask.trailing_zeros() as usize];
                 mask &= mask - 1;
