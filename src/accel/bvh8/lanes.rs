@@ -85,23 +85,6 @@ impl Lanes {
         (0..W).fold(0, |m, i| m | u32::from(bits(a[i]) <= bits(b[i])) << i)
     }
 
-    /// `self` in the lanes of `mask`, `+inf` in the others.
-    #[inline(always)]
-    pub fn or_inf_outside(self, mask: u32) -> Lanes {
-        let a = self.to_array();
-        let v: [f32; W] = std::array::from_fn(|i| {
-            if mask >> i & 1 != 0 {
-                a[i]
-            } else {
-                f32::INFINITY
-            }
-        });
-        Lanes([
-            Vec4::new(v[0], v[1], v[2], v[3]),
-            Vec4::new(v[4], v[5], v[6], v[7]),
-        ])
-    }
-
     /// Per lane, `neg`'s value where `self < 0`, else `pos`'s.
     #[inline(always)]
     pub fn by_sign(self, neg: Lanes, pos: Lanes) -> Lanes {

@@ -1,19 +1,22 @@
 //! Packets: up to eight rays walked through the tree together, for rays
 //! that go the same way (a tile's camera rays, shadow rays towards one
-//! light). Each node is loaded once for the packet and each ray still gets
-//! its own box test (`RayData::boxes`, the single-ray test), so a ray
-//! enters exactly the boxes its own walk would enter; leaves run each ray's
-//! own triangle test (`traverse::leaf_block`). What the packet shares is
-//! the node's load, the loop's control and the ordering of the children.
+//! light). Per node, one box test for the whole packet ([`Frustum`]: slab
+//! bounds from the extremes of the rays' `1 / dir` and `origin · inv`,
+//! which keep every box any ray's own test keeps); per leaf's box, each
+//! ray's own test; per leaf, each ray's own triangle test
+//! (`traverse::leaf_block`). What the packet saves is the node work: one
+//! box test and one ordering a node for all its rays.
 //!
 //! Same hits as single rays, bit for bit: a ray's closest hit is the
-//! nearest of the items in the boxes it enters, the tie between two items
-//! at the same `t` going to the smaller id (`traverse::closer`), whatever
-//! the order of the visit; and an any-hit answer is a yes or a no.
+//! nearest of the items in the leaves it tests, which hold every item the
+//! ray meets in its range, the tie between two items at the same `t` going
+//! to the smaller id (`traverse::closer`), whatever the order of the
+//! visit; an any-hit answer is a yes or a no.
 //!
-//! Rays the single walk would take off the integer reduction
-//! (`RayData::reduce_as_ints`: a negative `tmin`, an origin far out) are
-//! walked one at a time.
+//! Packets whose rays do not share an octant or whose directions spread
+//! too far for tight bounds ([`MAX_SPREAD`]), and rays the single walk
+//! would take off the integer reduction (`RayData::reduce_as_ints`: a
+//! negative `tmin`, an origin far out), are walked one ray at a time.
 
 use super::lanes::{Lanes, W};
 use super::node::{is_leaf, leaf_range, Node, Tri4, EMPTY, NO_ITEM, OTHER};
@@ -26,6 +29,11 @@ use crate::stats::TraversalStats;
 /// Most rays in a packet.
 pub const PACKET: usize = 8;
 
+/// The largest spread of a packet's `1 / d` along an axis, relative to
+/// its smallest magnitude, that the packet walk takes (see
+/// [`Frustum::new`]).
+const MAX_SPREAD: f32 = 0.125;
+
 /// One ray of a packet: the ray and its `(tmin, tmax)` range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PacketRay {
@@ -35,278 +43,6 @@ pub struct PacketRay {
     pub tmin: f32,
     /// Hits must lie before this.
     pub tmax: f32,
-}
-
-/// The 8×8 bit matrix in `x` (byte `i`, bit `j`) transposed: bit `j` of
-/// byte `i` moves to bit `i` of byte `j` (Hacker's Delight, `transpose8`).
-/// Byte `r` holding the children ray `r` enters becomes byte `c` holding
-/// the rays that enter child `c`.
-#[inline(always)]
-fn transpose8(mut x: u64) -> u64 {
-    let t = (x ^ (x >> 7)) & 0x00aa_00aa_00aa_00aa;
-    x ^= t ^ (t << 7);
-    let t = (x ^ (x >> 14)) & 0x0000_cccc_0000_cccc;
-    x ^= t ^ (t << 14);
-    let t = (x ^ (x >> 28)) & 0x0000_0000_f0f0_f0f0;
-    x ^ t ^ (t << 28)
-}
-
-/// A packet's view of one node: for each child the rays that enter it
-/// (byte `c` of `rays`), the nearest of their entry distances, and the
-/// children some ray enters (`mask`).
-struct NodeHits {
-    mask: u32,
-    rays: u64,
-    dist: Lanes,
-}
-
-/// The box test of every ray in `active` against `node`'s eight boxes.
-#[inline(always)]
-fn node_hits<B: BoxTest>(
-    bt: B,
-    rd: &[RayData; PACKET],
-    tmin: &[Lanes; PACKET],
-    tmax: &[f32; PACKET],
-    node: &Node,
-    active: u32,
-) -> NodeHits {
-    let (mut by_ray, mut mask) = (0u64, 0u32);
-    let mut dist = Lanes::INFINITY;
-    let mut todo = active;
-    while todo != 0 {
-        let r = todo.trailing_zeros() as usize;
-        todo &= todo - 1;
-        let (m, d) =
-            rd[r].boxes::<_, ANY_OCTANT, true, true>(bt, node, tmin[r], Lanes::splat(tmax[r]));
-        by_ray |= u64::from(m) << (8 * r);
-        mask |= m;
-        dist = dist.min(d);
-    }
-    NodeHits {
-        mask,
-        rays: transpose8(by_ray),
-        dist,
-    }
-}
-
-/// The rays of byte `c`.
-#[inline(always)]
-fn rays_of(rays: u64, c: usize) -> u32 {
-    (rays >> (8 * c)) as u32 & 0xff
-}
-
-/// Per-ray constants for the per-ray packet walk (filler lanes copy the
-/// last ray).
-#[inline(always)]
-fn setup(rays: &[PacketRay]) -> ([RayData; PACKET], [Lanes; PACKET]) {
-    debug_assert!(!rays.is_empty() && rays.len() <= PACKET);
-    let last = rays.len() - 1;
-    let rd: [RayData; PACKET] = std::array::from_fn(|r| RayData::new(&rays[r.min(last)].ray));
-    let tmin = std::array::from_fn(|r| Lanes::splat(rays[r.min(last)].tmin));
-    (rd, tmin)
-}
-
-/// The closest hit of each ray of `rays` (at most [`PACKET`]) into
-/// `out[..rays.len()]`, with an `N`-entry stack (as `traverse::closest`).
-/// Always inlined, so that `dispatch`'s AVX2 copy compiles it with AVX2.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn closest_by_ray<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
-    bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    rays: &[PacketRay],
-    (rd, tmin4, walked): (&[RayData; PACKET], &[Lanes; PACKET], u32),
-    out: &mut [Option<Closest>],
-    stats: &mut S,
-) {
-    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
-    let mut tmax: [f32; PACKET] = std::array::from_fn(|r| rays.get(r).map_or(0.0, |q| q.tmax));
-    let mut best: [Option<Closest>; PACKET] = [None; PACKET];
-    let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
-    let mut stack = [(0u32, 0u32, 0f32); N];
-    let mut sp = 0usize;
-    let (mut cur, mut active) = (0u32, walked);
-    while active != 0 {
-        if !is_leaf(cur) {
-            let node = &nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += u64::from(active.count_ones());
-            }
-            let h = node_hits(bt, rd, tmin4, &tmax, node, active);
-            let mut mask = h.mask;
-            if mask != 0 {
-                let first = mask.trailing_zeros() as usize;
-                if mask & (mask - 1) == 0 {
-                    cur = node.child[first];
-                    active = rays_of(h.rays, first);
-                    continue;
-                }
-                // Nearest first: the others pushed far to near (an
-                // insertion sort on the packet's nearest entry).
-                let dist = h.dist.to_array();
-                let mut kids = [(0u32, 0u32, 0f32); W];
-                let mut k = 0;
-                while mask != 0 {
-                    let i = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let e = (node.child[i], rays_of(h.rays, i), dist[i]);
-                    prefetch_child(nodes, tris, e.0);
-                    let mut j = k;
-                    while j > 0 && kids[j - 1].2 < e.2 {
-                        kids[j] = kids[j - 1];
-                        j -= 1;
-                    }
-                    kids[j] = e;
-                    k += 1;
-                }
-                for &e in &kids[..k - 1] {
-                    stack[sp] = e;
-                    sp += 1;
-                }
-                (cur, active) = (kids[k - 1].0, kids[k - 1].1);
-                continue;
-            }
-        } else if cur != EMPTY {
-            let (start, count) = leaf_range(cur);
-            let mut todo = active;
-            while todo != 0 {
-                let r = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                let ray = &rays[r].ray;
-                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(ray));
-                for b in &tris[start..start + count] {
-                    if S::ENABLED {
-                        n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
-                    }
-                    let tmin = rays[r].tmin;
-                    leaf_block(bt, lr, b, fallback, ray, tmin, &mut tmax[r], &mut best[r]);
-                }
-            }
-        }
-        // Pop the nearest pending child that some ray can still find a
-        // closer hit in (the entry's distance is its rays' nearest).
-        active = 0;
-        while sp > 0 {
-            sp -= 1;
-            let (c, m, d) = stack[sp];
-            let mut keep = 0;
-            let mut todo = m;
-            while todo != 0 {
-                let r = todo.trailing_zeros();
-                todo &= todo - 1;
-                keep |= u32::from(d <= tmax[r as usize]) << r;
-            }
-            if keep != 0 {
-                (cur, active) = (c, keep);
-                break;
-            }
-        }
-    }
-    for (r, o) in out.iter_mut().enumerate() {
-        if walked & 1 << r != 0 {
-            *o = best[r];
-        }
-    }
-    stats.add(n_nodes, n_tests);
-}
-
-/// Whether anything but triangle `skip[r]` lies on ray `r` of `rays` in its
-/// range: bit `r` of the result (as `traverse::any`; `skip` empty or one id
-/// per ray, [`NO_ITEM`] for none). A ray leaves the packet at its first hit.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn any_by_ray<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
-    bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    rays: &[PacketRay],
-    skip: &[u32],
-    (rd, tmin4, walked): (&[RayData; PACKET], &[Lanes; PACKET], u32),
-    stats: &mut S,
-) -> u32 {
-    let skip_of = |r: usize| skip.get(r).copied().unwrap_or(NO_ITEM);
-    let mut hit = 0u32;
-    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
-    let tmax: [f32; PACKET] = std::array::from_fn(|r| rays.get(r).map_or(0.0, |q| q.tmax));
-    let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
-    let mut stack = [(0u32, 0u32); N];
-    let mut sp = 0usize;
-    // Rays still looking for a hit, and those in the current subtree.
-    let mut open = walked;
-    let (mut cur, mut active) = (0u32, walked);
-    loop {
-        if !is_leaf(cur) {
-            let node = &nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += u64::from(active.count_ones());
-            }
-            let h = node_hits(bt, rd, tmin4, &tmax, node, active);
-            let mut mask = h.mask;
-            if mask != 0 {
-                let first = mask.trailing_zeros() as usize;
-                cur = node.child[first];
-                active = rays_of(h.rays, first);
-                mask &= mask - 1;
-                if mask != 0 {
-                    prefetch_child(nodes, tris, cur);
-                    while mask != 0 {
-                        let i = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        prefetch_child(nodes, tris, node.child[i]);
-                        stack[sp] = (node.child[i], rays_of(h.rays, i));
-                        sp += 1;
-                    }
-                }
-                continue;
-            }
-        } else if cur != EMPTY {
-            let (start, count) = leaf_range(cur);
-            let mut todo = active;
-            while todo != 0 {
-                let r = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                let q = &rays[r];
-                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray));
-                for b in &tris[start..start + count] {
-                    if S::ENABLED {
-                        n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
-                    }
-                    let blocked = lr.triangles(bt, b, q.tmin, q.tmax, skip_of(r)).0 != 0
-                        || (b.has_other()
-                            && b.ids.iter().any(|&id| {
-                                id != NO_ITEM
-                                    && id & OTHER != 0
-                                    && fallback
-                                        .intersect(id & !OTHER, &q.ray, q.tmin, q.tmax)
-                                        .is_some()
-                            }));
-                    if blocked {
-                        hit |= 1 << r;
-                        open &= !(1 << r);
-                        break;
-                    }
-                }
-            }
-        }
-        // Pop a pending child some ray still open enters.
-        active = 0;
-        while sp > 0 && open != 0 {
-            sp -= 1;
-            let (c, m) = stack[sp];
-            if m & open != 0 {
-                (cur, active) = (c, m & open);
-                break;
-            }
-        }
-        if active == 0 {
-            break;
-        }
-    }
-    stats.add(n_nodes, n_tests);
-    hit
 }
 
 /// The packet as a whole, for rays that share an octant: each ray's `1 /
@@ -380,6 +116,17 @@ impl Frustum {
             (l, Lanes::splat(lo), Lanes::splat(hi))
         };
         let [x, y, z, ox, oy, oz, t] = std::array::from_fn(lanes);
+        // Directions that differ much along an axis (the bounds of a
+        // component's `1 / d` far apart relative to its size) make the
+        // bounds loose: the packet would enter boxes none of its rays
+        // enters. Such packets are walked one ray at a time.
+        let tight = |l: &(Lanes, Lanes, Lanes)| {
+            let (lo, hi) = (l.1[0], l.2[0]);
+            hi - lo <= MAX_SPREAD * lo.abs().min(hi.abs())
+        };
+        if ![&x, &y, &z].into_iter().all(tight) {
+            return (None, walked);
+        }
         let s = |a: usize| (octant >> a) & 1;
         let f = Frustum {
             inv: [x.0, y.0, z.0],
@@ -435,9 +182,9 @@ impl Frustum {
 
 /// The closest hit of each ray of `rays` (at most [`PACKET`]) into
 /// `out[..rays.len()]`, with an `N`-entry stack (as `traverse::closest`).
-/// Rays sharing an octant take the packet walk (one box test per node for
-/// the packet, each ray's own test at leaves' boxes), others the per-ray
-/// packet walk; rays off the integer path the single walk. Always
+/// A packet [`Frustum::new`] accepts takes the packet walk (one box test
+/// per node for the packet, each ray's own test at leaves' boxes); other
+/// packets, and rays off the integer path, the single walk. Always
 /// inlined, so that `dispatch`'s AVX2 copy compiles it with AVX2.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -456,6 +203,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
         return;
     }
     let (f, walked) = Frustum::new(rays);
+    let walked = if f.is_some() { walked } else { 0 };
     for (r, q) in rays.iter().enumerate() {
         if walked & 1 << r == 0 {
             let rd = &RayData::new(&q.ray);
@@ -464,16 +212,8 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
             );
         }
     }
-    match f {
-        Some(f) => {
-            closest_frustum::<S, F, B, N>(bt, nodes, tris, fallback, rays, &f, walked, out, stats)
-        }
-        None if walked != 0 => {
-            let (rd, tmin4) = setup(rays);
-            let by_ray = (&rd, &tmin4, walked);
-            closest_by_ray::<S, F, B, N>(bt, nodes, tris, fallback, rays, by_ray, out, stats)
-        }
-        None => {}
+    if let Some(f) = f {
+        closest_frustum::<S, F, B, N>(bt, nodes, tris, fallback, rays, &f, walked, out, stats)
     }
 }
 
@@ -496,6 +236,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
     }
     debug_assert!(skip.is_empty() || skip.len() == rays.len());
     let (f, walked) = Frustum::new(rays);
+    let walked = if f.is_some() { walked } else { 0 };
     let mut hit = 0u32;
     for (r, q) in rays.iter().enumerate() {
         if walked & 1 << r == 0 {
@@ -507,16 +248,13 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
             hit |= u32::from(h) << r;
         }
     }
-    hit | match f {
+    match f {
         Some(f) => {
-            any_frustum::<S, F, B, N>(bt, nodes, tris, fallback, rays, skip, &f, walked, stats)
+            hit | any_frustum::<S, F, B, N>(
+                bt, nodes, tris, fallback, rays, skip, &f, walked, stats,
+            )
         }
-        None if walked != 0 => {
-            let (rd, tmin4) = setup(rays);
-            let by_ray = (&rd, &tmin4, walked);
-            any_by_ray::<S, F, B, N>(bt, nodes, tris, fallback, rays, skip, by_ray, stats)
-        }
-        None => 0,
+        None => hit,
     }
 }
 

@@ -8,20 +8,6 @@ use crate::math::Vec3;
 use crate::primitive::Primitive;
 use crate::stats::{Counters, NoStats};
 
-#[test]
-fn transpose8_moves_bit_j_of_byte_i_to_bit_i_of_byte_j() {
-    let mut r = Rng::new(4);
-    for _ in 0..200 {
-        let x = (0..8).fold(0u64, |x, _| x << 8 | (r.f() * 256.0) as u64);
-        let t = transpose8(x);
-        for i in 0..8 {
-            for j in 0..8 {
-                assert_eq!(x >> (8 * i + j) & 1, t >> (8 * j + i) & 1, "{x:x}");
-            }
-        }
-    }
-}
-
 /// Asserts that each ray of each packet gets, from the packet walks, the
 /// closest hit (`t` and barycentrics compared as bits, and the id) and the
 /// any-hit answer of the single walks; returns how many rays hit.
@@ -290,4 +276,71 @@ fn the_portable_packet_copy_answers_as_the_dispatched_one() {
             assert_eq!(x, y);
         }
     }
+}
+
+/// The packet's one box test keeps every box some ray's own test (the
+/// integer form the single walk runs) keeps, and the per-ray test of a
+/// leaf's box keeps each ray's own boxes: random boxes, packets from one
+/// origin (a camera's) and from nearby origins (shadow rays), with the
+/// distance bound below each ray's own entry distance.
+#[test]
+fn the_packet_box_test_keeps_every_box_its_rays_keep() {
+    use crate::accel::bvh8::lanes::{Lanes, W};
+    use crate::accel::bvh8::node::Node;
+    use crate::accel::bvh8::traverse::{Portable, RayData, ANY_OCTANT};
+    let mut r = Rng::new(21);
+    let (mut kept, mut packets) = (0, 0);
+    for k in 0..4000 {
+        let mut node = Node::EMPTY;
+        for i in 0..W {
+            if r.f() < 0.9 {
+                let lo = r.v(-4.0, 4.0);
+                node.set(i, i as u32, lo, lo + r.v(0.0, 3.0));
+            }
+        }
+        let base = r.v(-9.0, 9.0);
+        let dir = r.v(-1.0, 1.0);
+        let rays: Vec<PacketRay> = (0..PACKET)
+            .map(|_| {
+                let o = if k % 2 == 0 {
+                    base
+                } else {
+                    base + r.v(-0.1, 0.1)
+                };
+                pr(
+                    crate::math::Ray::new(o, dir + r.v(-0.02, 0.02)),
+                    0.0,
+                    5.0 + 20.0 * r.f(),
+                )
+            })
+            .collect();
+        let (Some(f), walked) = Frustum::new(&rays) else {
+            continue;
+        };
+        assert_eq!(walked, 0xff);
+        packets += 1;
+        let mut tmax = Lanes::splat(0.0);
+        for (i, q) in rays.iter().enumerate() {
+            tmax[i] = q.tmax;
+        }
+        let (mask, dist) = f.boxes(&node, tmax.max_of(walked));
+        for (i, q) in rays.iter().enumerate() {
+            let rd = RayData::new(&q.ray);
+            let (own, d) = rd.boxes::<_, ANY_OCTANT, true>(
+                Portable,
+                &node,
+                Lanes::splat(q.tmin),
+                Lanes::splat(q.tmax),
+            );
+            assert_eq!(own & !mask, 0, "packet {k} ray {i}");
+            for c in 0..W {
+                if own >> c & 1 != 0 {
+                    assert!(dist[c] <= d[c], "packet {k} ray {i} box {c}");
+                    assert!(f.rays_into(&node, c, tmax) >> i & 1 != 0);
+                    kept += 1;
+                }
+            }
+        }
+    }
+    assert!(packets > 1000 && kept > 500, "{packets} {kept}");
 }

@@ -203,11 +203,8 @@ impl RayData {
     /// NaN, a NaN slab is always a first operand, and a NaN result of the
     /// inner pair is again a first operand (`tmin` and `tmax` are never
     /// NaN), so such a slab is ignored.
-    ///
-    /// With `M`, the distances of the boxes missed are `+inf` (the packet
-    /// walk takes their minimum over its rays).
     #[inline(always)]
-    pub(crate) fn boxes<B: BoxTest, const O: usize, const I: bool, const M: bool>(
+    pub(crate) fn boxes<B: BoxTest, const O: usize, const I: bool>(
         &self,
         bt: B,
         n: &Node,
@@ -216,7 +213,7 @@ impl RayData {
     ) -> (u32, Lanes) {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = bt.avx() {
-            return self.boxes_avx::<O, I, M>(avx, n, tmin, tmax);
+            return self.boxes_avx::<O, I>(avx, n, tmin, tmax);
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = bt;
@@ -228,19 +225,14 @@ impl RayData {
         let tfx = p[far[0]].mul_sub(self.inv[0], self.oi[0]);
         let tfy = p[far[1]].mul_sub(self.inv[1], self.oi[1]);
         let tfz = p[far[2]].mul_sub(self.inv[2], self.oi[2]);
-        let (mask, tn) = if I {
+        if I {
             let tn = tnx.max_bits(tny).max_bits(tnz.max_bits(tmin));
             let tf = tfx.min_bits(tfy).min_bits(tfz.min_bits(tmax));
-            (tn.le_mask_bits(tf), tn)
-        } else {
-            let tn = tnx.max(tny).max(tnz.max(tmin));
-            let tf = tfx.min(tfy).min(tfz.min(tmax));
-            (tn.le_mask(tf), tn)
-        };
-        if M {
-            return (mask, tn.or_inf_outside(mask));
+            return (tn.le_mask_bits(tf), tn);
         }
-        (mask, tn)
+        let tn = tnx.max(tny).max(tnz.max(tmin));
+        let tf = tfx.min(tfy).min(tfz.min(tmax));
+        (tn.le_mask(tf), tn)
     }
 
     /// [`boxes`](Self::boxes) with 256-bit AVX operations: the same
@@ -257,7 +249,7 @@ impl RayData {
     /// `_mm256_*` intrinsics then inline into that AVX2 function.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn boxes_avx<const O: usize, const I: bool, const M: bool>(
+    fn boxes_avx<const O: usize, const I: bool>(
         &self,
         _: Avx,
         n: &Node,
@@ -300,21 +292,11 @@ impl RayData {
                 // `tn <= tf` is `!(tn > tf)`: AVX2 has only the latter.
                 let out = _mm256_castsi256_ps(_mm256_cmpgt_epi32(tn, tf));
                 let mask = !(_mm256_movemask_ps(out) as u32) & 0xff;
-                let mut tn = _mm256_castsi256_ps(tn);
-                if M {
-                    tn = _mm256_blendv_ps(tn, _mm256_set1_ps(f32::INFINITY), out);
-                }
-                return (mask, std::mem::transmute::<__m256, Lanes>(tn));
+                return (mask, std::mem::transmute::<__m256i, Lanes>(tn));
             }
             let tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, ld(&tmin)));
             let tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, ld(&tmax)));
-            let hit = _mm256_cmp_ps::<_CMP_LE_OS>(tn, tf);
-            let mask = _mm256_movemask_ps(hit) as u32;
-            let tn = if M {
-                _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), tn, hit)
-            } else {
-                tn
-            };
+            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(tn, tf)) as u32;
             (mask, std::mem::transmute::<__m256, Lanes>(tn))
         }
     }
@@ -650,7 +632,7 @@ pub(crate) fn closest<
             if S::ENABLED {
                 n_nodes += 1;
             }
-            let (mask, dist) = rd.boxes::<_, O, I, false>(bt, node, tmin4, Lanes::splat(tmax));
+            let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
@@ -728,7 +710,7 @@ pub(crate) fn any<
             }
             // No ordering: any occluder ends the walk, and sorting costs
             // more than it saves for shadow rays.
-            let (mut mask, _) = rd.boxes::<_, O, I, false>(bt, node, tmin4, tmax4);
+            let (mut mask, _) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
             if mask != 0 {
                 cur = node.child[mask.trailing_zeros() as usize];
                 mask &= mask - 1;

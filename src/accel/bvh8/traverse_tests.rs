@@ -105,12 +105,12 @@ fn octant_copies_use_the_rays_planes() {
             let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(10.0));
             for ((m, d), (rm, rdist)) in [
                 (
-                    rd.boxes::<_, O, false, false>(Portable, &node, tmin, tmax),
-                    rd.boxes::<_, ANY_OCTANT, false, false>(Portable, &node, tmin, tmax),
+                    rd.boxes::<_, O, false>(Portable, &node, tmin, tmax),
+                    rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax),
                 ),
                 (
-                    rd.boxes::<_, O, true, false>(Portable, &node, tmin, tmax),
-                    rd.boxes::<_, ANY_OCTANT, true, false>(Portable, &node, tmin, tmax),
+                    rd.boxes::<_, O, true>(Portable, &node, tmin, tmax),
+                    rd.boxes::<_, ANY_OCTANT, true>(Portable, &node, tmin, tmax),
                 ),
             ] {
                 assert_eq!(
@@ -167,7 +167,7 @@ impl Grid {
 }
 
 /// The AVX box test gives the portable test's masks and distances bit
-/// for bit (also with the missed boxes' distances made `+inf`), directions with zero components (clamped by
+/// for bit, directions with zero components (clamped by
 /// `safe_inverse`) and origins on a box's planes included.
 #[cfg(target_arch = "x86_64")]
 #[test]
@@ -185,20 +185,12 @@ fn avx_boxes_match_portable() {
         let (tmin, tmax) = (Lanes::splat(0.0), Lanes::splat(g.next().abs() + 1.0));
         for ((pm, pd), (am, ad)) in [
             (
-                rd.boxes::<_, ANY_OCTANT, false, false>(Portable, &node, tmin, tmax),
-                rd.boxes::<_, ANY_OCTANT, false, false>(avx, &node, tmin, tmax),
+                rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax),
+                rd.boxes::<_, ANY_OCTANT, false>(avx, &node, tmin, tmax),
             ),
             (
-                rd.boxes::<_, ANY_OCTANT, true, false>(Portable, &node, tmin, tmax),
-                rd.boxes::<_, ANY_OCTANT, true, false>(avx, &node, tmin, tmax),
-            ),
-            (
-                rd.boxes::<_, ANY_OCTANT, false, true>(Portable, &node, tmin, tmax),
-                rd.boxes::<_, ANY_OCTANT, false, true>(avx, &node, tmin, tmax),
-            ),
-            (
-                rd.boxes::<_, ANY_OCTANT, true, true>(Portable, &node, tmin, tmax),
-                rd.boxes::<_, ANY_OCTANT, true, true>(avx, &node, tmin, tmax),
+                rd.boxes::<_, ANY_OCTANT, true>(Portable, &node, tmin, tmax),
+                rd.boxes::<_, ANY_OCTANT, true>(avx, &node, tmin, tmax),
             ),
         ] {
             assert_eq!(pm, am);
@@ -226,8 +218,8 @@ fn integer_reduction_keeps_the_float_tests_boxes() {
         let t0 = g.next().abs() * 0.25;
         assert!(rd.reduce_as_ints(t0));
         let (tmin, tmax) = (Lanes::splat(t0), Lanes::splat(t0 + g.next().abs() + 1.0));
-        let (fm, fd) = rd.boxes::<_, ANY_OCTANT, false, false>(Portable, &node, tmin, tmax);
-        let (im, id) = rd.boxes::<_, ANY_OCTANT, true, false>(Portable, &node, tmin, tmax);
+        let (fm, fd) = rd.boxes::<_, ANY_OCTANT, false>(Portable, &node, tmin, tmax);
+        let (im, id) = rd.boxes::<_, ANY_OCTANT, true>(Portable, &node, tmin, tmax);
         kept += im.count_ones();
         for i in 0..W {
             let (f, k) = (fm >> i & 1 == 1, im >> i & 1 == 1);
