@@ -11,8 +11,14 @@
 //!   for unordered ranges, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
 //!   nearest-child-first closest hit, unordered any hit with early exit.
+//! - `packet.rs`: up to eight rays walked together (one box test per node
+//!   for the packet), each with the hit its own walk finds, bit for bit.
 //! - `dispatch.rs`: the traversal compiled for SSE2 and for AVX2 with FMA, picked at
 //!   run time; `pages.rs`: the large arrays on transparent huge pages.
+//!
+//! Of two items hit at the very same `t`, every walk keeps the one with the
+//! smaller id (`traverse::closer`), as brute force does: the closest hit
+//! depends on the ray and the items only, not on the order of the visit.
 //!
 //! What it shares with the textbook [`Bvh`](super::Bvh): the padding rule
 //! (boxes grown by `overlap::margin`) and the triangle arithmetic
