@@ -9,7 +9,10 @@
 # count (1 and 2), so both see the same machine load; both report the best of 3 passes after a
 # warm-up and the best of 5 builds. Ratios: throughput glint/Embree (>1: glint faster), build time glint/Embree MEDIUM (<1:
 # glint faster), both against Embree's default MEDIUM build and single-ray queries (rtcIntersect1 /
-# rtcOccluded1). Raw outputs are kept in WORKDIR/compare/.
+# rtcOccluded1). A second table compares glint's packets (`Bvh8` packets of 8: the camera rays in 4x2
+# tiles, the shadow rays eight consecutive ones) with Embree's single rays and its packets
+# (rtcIntersect8/rtcOccluded8 fed the same way); their checksums count in the checksums column.
+# Raw outputs are kept in WORKDIR/compare/.
 # THREADS="1 2" (default) picks the thread counts. BASELINE=path/to/an/older/glint also runs that
 # binary in each repetition, right after the current one, and prints a second table for it: a
 # before/after comparison against the same Embree runs.
@@ -60,9 +63,14 @@ def embree(path):
             e[m[1]] = {"mrays": float(m[2]), "hits": int(m[3]), "tsum": float(m[4])}
         elif m := re.match(r"\s+MEDIUM T=\d+ shadow\s+rtcOccluded1\s+([\d.]+) Mrays/s\s+occluded=(\d+)", line):
             e["shadow"] = {"mrays": float(m[1]), "occluded": int(m[2])}
+        elif m := re.match(r"\s+MEDIUM T=\d+ primary\s+rtcIntersect8\s+([\d.]+) Mrays/s", line):
+            e["primary8"] = float(m[1])
+        elif m := re.match(r"\s+MEDIUM T=\d+ shadow\s+rtcOccluded8\s+([\d.]+) Mrays/s", line):
+            e["shadow8"] = float(m[1])
     return e
 def close(a, b):  # the criterion: within 0.1%
     return abs(a - b) <= 1e-3 * max(abs(a), abs(b), 1e-30)
+packets = {}
 print("| mesh | threads | primary | incoherent | shadow | build (glint/Embree MEDIUM) | glint build ms | Embree build ms | bytes/triangle | checksums |")
 print("|---|---|---|---|---|---|---|---|---|---|")
 for m in meshes:
@@ -79,6 +87,16 @@ for m in meshes:
             for k in ("primary", "incoherent"):
                 ok &= close(g[k]["hits"], e[k]["hits"]) and close(g[k]["tsum"], e[k]["tsum"])
             ok &= close(g["shadow"]["occluded"], e["shadow"]["occluded"])
+            gp, gs = g.get("primary_packets"), g.get("shadow_packets")
+            if gp and gs and "primary8" in e and "shadow8" in e:
+                ok &= close(gp["hits"], e["primary"]["hits"]) and close(gp["tsum"], e["primary"]["tsum"])
+                ok &= close(gs["occluded"], e["shadow"]["occluded"])
+                packets.setdefault((m, t), []).append({
+                    "p1": gp["mrays"] / e["primary"]["mrays"], "p8": gp["mrays"] / e["primary8"],
+                    "s1": gs["mrays"] / e["shadow"]["mrays"], "s8": gs["mrays"] / e["shadow8"],
+                    "gp": gp["mrays"] / g["primary"]["mrays"], "gs": gs["mrays"] / g["shadow"]["mrays"],
+                    "ep": e["primary8"] / e["primary"]["mrays"], "es": e["shadow8"] / e["shadow"]["mrays"],
+                })
             rows.append({
                 "primary": g["primary"]["mrays"] / e["primary"]["mrays"],
                 "incoherent": g["incoherent"]["mrays"] / e["incoherent"]["mrays"],
@@ -94,5 +112,13 @@ for m in meshes:
               f"{med['build']:.2f} | {med['gb']:.0f} | {med['eb']:.0f} | {med['bytes']:.1f} | "
               f"{'within 0.1%' if ok else 'DIFFER'} |")
 print(f"\nratios: medians over the repetitions shown (of {reps} planned); throughput ratios > 1 and build ratios < 1 favour glint")
+if packets:
+    print("\nPackets (glint: Bvh8 packets of 8, 4x2 camera tiles / 8 consecutive shadow rays, as Embree's rtcIntersect8/rtcOccluded8 are fed):")
+    print("| mesh | threads | camera packets / Embree rtcIntersect1 | / Embree rtcIntersect8 | shadow packets / Embree rtcOccluded1 | / Embree rtcOccluded8 | glint packets / glint single (camera, shadow) | Embree 8 / Embree 1 (camera, shadow) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for (m, t), rs in packets.items():
+        med = {k: statistics.median(r[k] for r in rs) for k in rs[0]}
+        print(f"| {m} | {t} ({len(rs)} rep.) | {med['p1']:.2f} | {med['p8']:.2f} | {med['s1']:.2f} | {med['s8']:.2f} | "
+              f"{med['gp']:.2f}, {med['gs']:.2f} | {med['ep']:.2f}, {med['es']:.2f} |")
 PY
 done

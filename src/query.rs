@@ -14,6 +14,7 @@
 //! ```
 
 use crate::accel::bvh8::{Bvh8, TrianglesOnly};
+pub use crate::accel::bvh8::{PacketRay, PACKET};
 use crate::math::{Ray, Vec3};
 use crate::stats::{NoStats, TraversalStats};
 
@@ -123,6 +124,55 @@ impl MeshScene {
         self.bvh.any(&TrianglesOnly, ray, tmin, tmax, stats)
     }
 
+    /// The closest hit of each ray of a packet of at most [`PACKET`] rays
+    /// into `out[..rays.len()]`: what [`MeshScene::intersect`] returns for
+    /// each, bit for bit, in less time when the rays go the same way
+    /// (neighbouring camera rays).
+    ///
+    /// # Panics
+    /// If `rays` holds more than [`PACKET`] rays or `out` fewer than `rays`.
+    #[inline]
+    pub fn intersect_packet(&self, rays: &[PacketRay], out: &mut [Option<MeshHit>]) {
+        self.intersect_packet_with(rays, out, &mut NoStats)
+    }
+
+    /// [`MeshScene::intersect_packet`], counting into `stats` (nodes once
+    /// per packet, triangles once per ray).
+    #[inline]
+    pub fn intersect_packet_with<S: TraversalStats>(
+        &self,
+        rays: &[PacketRay],
+        out: &mut [Option<MeshHit>],
+        stats: &mut S,
+    ) {
+        let mut hits = [None; PACKET];
+        self.bvh
+            .closest_packet(&TrianglesOnly, rays, &mut hits[..], stats);
+        for (o, h) in out[..rays.len()].iter_mut().zip(hits) {
+            *o = h.map(|(t, triangle)| MeshHit { t, triangle });
+        }
+    }
+
+    /// Which rays of a packet of at most [`PACKET`] are blocked: bit `r`
+    /// set when [`MeshScene::occluded`] says so for ray `r`.
+    ///
+    /// # Panics
+    /// If `rays` holds more than [`PACKET`] rays.
+    #[inline]
+    pub fn occluded_packet(&self, rays: &[PacketRay]) -> u32 {
+        self.occluded_packet_with(rays, &mut NoStats)
+    }
+
+    /// [`MeshScene::occluded_packet`], counting into `stats`.
+    #[inline]
+    pub fn occluded_packet_with<S: TraversalStats>(
+        &self,
+        rays: &[PacketRay],
+        stats: &mut S,
+    ) -> u32 {
+        self.bvh.any_packet(&TrianglesOnly, rays, &[], stats)
+    }
+
     /// Triangles in the index buffer it was built from.
     pub fn triangle_count(&self) -> usize {
         self.triangles
@@ -151,7 +201,8 @@ mod tests {
         assert_eq!(MeshScene::new(&v, &[]).err(), Some(MeshError::NotFinite(0)));
     }
 
-    /// Same hits as testing every triangle with the shape's own test.
+    /// Same hits as testing every triangle with the shape's own test, one
+    /// ray at a time and in packets.
     #[test]
     fn agrees_with_every_triangle_tested() {
         let mut s = 12345u64;
@@ -181,6 +232,7 @@ mod tests {
                 )
             })
             .collect();
+        let mut rays = Vec::new();
         for _ in 0..2000 {
             let ray = Ray::new(Vec3::new(f(), f(), f()) * 6.0, Vec3::new(f(), f(), f()));
             let mut want: Option<(f32, u32)> = None;
@@ -193,6 +245,24 @@ mod tests {
             let got = scene.intersect(&ray, 0.0, f32::INFINITY);
             assert_eq!(want.map(|w| w.0), got.map(|h| h.t), "{ray:?}");
             assert_eq!(want.is_some(), scene.occluded(&ray, 0.0, f32::INFINITY));
+            rays.push(PacketRay {
+                ray,
+                tmin: 0.0,
+                tmax: f32::INFINITY,
+            });
+        }
+        // The same rays in packets: the single queries' answers.
+        for p in rays.chunks(5) {
+            let mut out = [None; PACKET];
+            scene.intersect_packet(p, &mut out);
+            let blocked = scene.occluded_packet(p);
+            for (i, q) in p.iter().enumerate() {
+                assert_eq!(out[i], scene.intersect(&q.ray, q.tmin, q.tmax));
+                assert_eq!(
+                    blocked >> i & 1 != 0,
+                    scene.occluded(&q.ray, q.tmin, q.tmax)
+                );
+            }
         }
     }
 }

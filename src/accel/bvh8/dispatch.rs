@@ -16,6 +16,7 @@
 //! (`traverse::RayData::boxes_avx`, given an `Avx` token made only here).
 
 use super::node::{Node, Tri4};
+use super::packet::{self, PacketRay};
 use super::traverse::{
     self, BoxTest, Closest, Fallback, Portable, RayData, ANY_OCTANT, DEEP, SHALLOW,
 };
@@ -67,6 +68,91 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
         return unsafe { avx2::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep) };
     }
     portable::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep)
+}
+
+/// The closest hit of each ray of a packet (see `packet::closest`), on the
+/// best copy for this CPU.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn closest8<S: TraversalStats, F: Fallback + ?Sized>(
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    out: &mut [Option<Closest>],
+    stats: &mut S,
+    deep: bool,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if avx2_fma() {
+        // SAFETY: as in `closest`: AVX2 and FMA are present, checked just
+        // above.
+        return unsafe { avx2::closest8(nodes, tris, fallback, rays, out, stats, deep) };
+    }
+    portable::closest8(nodes, tris, fallback, rays, out, stats, deep)
+}
+
+/// Which rays of a packet are blocked (see `packet::any`), on the best
+/// copy for this CPU.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn any8<S: TraversalStats, F: Fallback + ?Sized>(
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    skip: &[u32],
+    stats: &mut S,
+    deep: bool,
+) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if avx2_fma() {
+        // SAFETY: as in `closest`: AVX2 and FMA are present, checked just
+        // above.
+        return unsafe { avx2::any8(nodes, tris, fallback, rays, skip, stats, deep) };
+    }
+    portable::any8(nodes, tris, fallback, rays, skip, stats, deep)
+}
+
+/// The packet walks with box test `bt` and the stack the tree's depth
+/// needs. Always inlined, as [`closest_with`].
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn closest8_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    out: &mut [Option<Closest>],
+    stats: &mut S,
+    deep: bool,
+) {
+    if deep {
+        packet::closest::<S, F, B, DEEP>(bt, nodes, tris, fallback, rays, out, stats)
+    } else {
+        packet::closest::<S, F, B, SHALLOW>(bt, nodes, tris, fallback, rays, out, stats)
+    }
+}
+
+/// See [`closest8_with`].
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn any8_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    skip: &[u32],
+    stats: &mut S,
+    deep: bool,
+) -> u32 {
+    if deep {
+        packet::any::<S, F, B, DEEP>(bt, nodes, tris, fallback, rays, skip, stats)
+    } else {
+        packet::any::<S, F, B, SHALLOW>(bt, nodes, tris, fallback, rays, skip, stats)
+    }
 }
 
 /// Whether the CPU has AVX2 and FMA (each a cached flag).
@@ -192,6 +278,9 @@ fn any_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
     }
 }
 
+#[cfg(test)]
+pub(crate) use portable::{any8 as portable_any8, closest8 as portable_closest8};
+
 /// The portable copies, out of line: inlined into the dispatchers above,
 /// their stack frame and saved registers were set up on every query even
 /// when the AVX2 copy ran (callgrind, scene6_07: 40 instructions a shadow
@@ -239,6 +328,33 @@ mod portable {
             stats,
             deep,
         )
+    }
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    pub(crate) fn closest8<S: TraversalStats, F: Fallback + ?Sized>(
+        nodes: &[Node],
+        tris: &[Tri4],
+        fallback: &F,
+        rays: &[PacketRay],
+        out: &mut [Option<Closest>],
+        stats: &mut S,
+        deep: bool,
+    ) {
+        closest8_with(Portable, nodes, tris, fallback, rays, out, stats, deep)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    pub(crate) fn any8<S: TraversalStats, F: Fallback + ?Sized>(
+        nodes: &[Node],
+        tris: &[Tri4],
+        fallback: &F,
+        rays: &[PacketRay],
+        skip: &[u32],
+        stats: &mut S,
+        deep: bool,
+    ) -> u32 {
+        any8_with(Portable, nodes, tris, fallback, rays, skip, stats, deep)
     }
 }
 
@@ -293,6 +409,40 @@ mod avx2 {
             stats,
             deep,
         )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn closest8<S: TraversalStats, F: Fallback + ?Sized>(
+        nodes: &[Node],
+        tris: &[Tri4],
+        fallback: &F,
+        rays: &[PacketRay],
+        out: &mut [Option<Closest>],
+        stats: &mut S,
+        deep: bool,
+    ) {
+        // SAFETY: these functions are called only after `avx2_fma()`
+        // (`Avx::new`'s contract).
+        let avx = unsafe { Avx::new() };
+        closest8_with(avx, nodes, tris, fallback, rays, out, stats, deep)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn any8<S: TraversalStats, F: Fallback + ?Sized>(
+        nodes: &[Node],
+        tris: &[Tri4],
+        fallback: &F,
+        rays: &[PacketRay],
+        skip: &[u32],
+        stats: &mut S,
+        deep: bool,
+    ) -> u32 {
+        // SAFETY: these functions are called only after `avx2_fma()`
+        // (`Avx::new`'s contract).
+        let avx = unsafe { Avx::new() };
+        any8_with(avx, nodes, tris, fallback, rays, skip, stats, deep)
     }
 }
 

@@ -85,6 +85,22 @@ impl Lanes {
         (0..W).fold(0, |m, i| m | u32::from(bits(a[i]) <= bits(b[i])) << i)
     }
 
+    /// Per lane, `neg`'s value where `self < 0`, else `pos`'s.
+    #[inline(always)]
+    pub fn by_sign(self, neg: Lanes, pos: Lanes) -> Lanes {
+        let pick = |i: usize| Vec4::select(self.0[i].cmplt(Vec4::ZERO), neg.0[i], pos.0[i]);
+        Lanes([pick(0), pick(1)])
+    }
+
+    /// The largest lane of those in `mask` (`−inf` for none).
+    #[inline(always)]
+    pub fn max_of(self, mask: u32) -> f32 {
+        let a = self.to_array();
+        (0..W)
+            .filter(|&i| mask >> i & 1 != 0)
+            .fold(f32::NEG_INFINITY, |m, i| m.max(a[i]))
+    }
+
     /// Per lane, `self`'s value where `keep(self, o)` on the bit patterns
     /// read as `i32`, else `o`'s.
     #[inline(always)]

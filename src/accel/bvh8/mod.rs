@@ -11,8 +11,14 @@
 //!   for unordered ranges, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
 //!   nearest-child-first closest hit, unordered any hit with early exit.
+//! - `packet.rs`: up to eight rays walked together (one box test per node
+//!   for the packet), each with the hit its own walk finds, bit for bit.
 //! - `dispatch.rs`: the traversal compiled for SSE2 and for AVX2 with FMA, picked at
 //!   run time; `pages.rs`: the large arrays on transparent huge pages.
+//!
+//! Of two items hit at the very same `t`, every walk keeps the one with the
+//! smaller id (`traverse::closer`), as brute force does: the closest hit
+//! depends on the ray and the items only, not on the order of the visit.
 //!
 //! What it shares with the textbook [`Bvh`](super::Bvh): the padding rule
 //! (boxes grown by `overlap::margin`) and the triangle arithmetic
@@ -32,9 +38,11 @@ mod build;
 mod dispatch;
 mod lanes;
 mod node;
+mod packet;
 mod pages;
 mod traverse;
 
+pub use packet::{PacketRay, PACKET};
 pub use traverse::{Fallback, TrianglesOnly};
 
 use super::{Aggregate, PrimHit};
@@ -218,6 +226,63 @@ impl Bvh8 {
     ) -> bool {
         let (n, t) = (&self.nodes, &self.tris);
         dispatch::any(n, t, fallback, ray, (tmin, tmax), skip, stats, self.deep)
+    }
+
+    /// The closest hit `(t, id)` of each ray of a packet (at most
+    /// [`PACKET`] rays; `out[..rays.len()]` receives them): the same hits
+    /// as [`closest`](Self::closest) for each ray alone, bit for bit, for
+    /// fewer node loads when the rays go the same way (a tile's camera
+    /// rays). Statistics count per ray, as the single walk does.
+    pub fn closest_packet<S: TraversalStats, F: Fallback + ?Sized>(
+        &self,
+        fallback: &F,
+        rays: &[PacketRay],
+        out: &mut [Option<(f32, u32)>],
+        stats: &mut S,
+    ) {
+        let mut hits = [None; PACKET];
+        self.closest_hit_packet(fallback, rays, &mut hits, stats);
+        for (o, h) in out.iter_mut().zip(&hits[..rays.len()]) {
+            *o = h.map(|h| (h.t, h.id));
+        }
+    }
+
+    /// [`closest_packet`](Self::closest_packet) with each triangle hit's
+    /// barycentrics.
+    ///
+    /// # Panics
+    /// If `rays` holds more than [`PACKET`] rays or `out` fewer than `rays`.
+    #[inline]
+    pub(crate) fn closest_hit_packet<S: TraversalStats, F: Fallback + ?Sized>(
+        &self,
+        fallback: &F,
+        rays: &[PacketRay],
+        out: &mut [Option<traverse::Closest>],
+        stats: &mut S,
+    ) {
+        assert!(rays.len() <= PACKET && out.len() >= rays.len());
+        let (n, t) = (&self.nodes, &self.tris);
+        dispatch::closest8(n, t, fallback, rays, out, stats, self.deep)
+    }
+
+    /// Which rays of a packet (at most [`PACKET`]) something blocks: bit
+    /// `r` for ray `r`, the answer [`any`](Self::any) gives for it alone.
+    /// `skip` is empty or holds one triangle per ray that cannot block it
+    /// (the one a shadow ray leaves; [`u32::MAX`] for none).
+    ///
+    /// # Panics
+    /// If `rays` holds more than [`PACKET`] rays, or `skip` is neither
+    /// empty nor as long as `rays`.
+    pub fn any_packet<S: TraversalStats, F: Fallback + ?Sized>(
+        &self,
+        fallback: &F,
+        rays: &[PacketRay],
+        skip: &[u32],
+        stats: &mut S,
+    ) -> u32 {
+        assert!(rays.len() <= PACKET && (skip.is_empty() || skip.len() == rays.len()));
+        let (n, t) = (&self.nodes, &self.tris);
+        dispatch::any8(n, t, fallback, rays, skip, stats, self.deep)
     }
 }
 

@@ -42,10 +42,10 @@ pub(crate) struct RayData {
     pub ray: Ray,
     /// `origin · inv` per axis, splatted: a slab distance is then one fused
     /// multiply-subtract, `plane · inv − origin · inv`.
-    oi: [Lanes; 3],
+    pub(crate) oi: [Lanes; 3],
     /// `1 / dir` per axis, splatted, with tiny components clamped (see
     /// [`safe_inverse`]).
-    inv: [Lanes; 3],
+    pub(crate) inv: [Lanes; 3],
     /// Index into `Node::planes` of the near and far plane per axis (the
     /// ray's octant).
     near: [usize; 3],
@@ -99,10 +99,17 @@ fn safe_inverse(d: Vec3) -> Vec3 {
 }
 
 impl RayData {
+    /// A ray's `1 / dir` (clamped, see [`safe_inverse`]) and `origin ·
+    /// inv`, the values [`new`](Self::new) splats.
+    #[inline(always)]
+    pub(crate) fn inv_oi(ray: &Ray) -> (Vec3, Vec3) {
+        let inv = safe_inverse(ray.dir);
+        (inv, ray.origin * inv)
+    }
+
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
-        let inv = safe_inverse(ray.dir);
-        let oi = ray.origin * inv;
+        let (inv, oi) = Self::inv_oi(ray);
         // The sign bit of `1 / d`: set for `d < 0`, for `d = −0` (`−∞`) and
         // for `d = −∞` (`−0`), as `inv < 0 || (inv == 0 && d < 0)` was; a NaN
         // direction makes every slab NaN, whichever plane is near.
@@ -197,7 +204,7 @@ impl RayData {
     /// inner pair is again a first operand (`tmin` and `tmax` are never
     /// NaN), so such a slab is ignored.
     #[inline(always)]
-    fn boxes<B: BoxTest, const O: usize, const I: bool>(
+    pub(crate) fn boxes<B: BoxTest, const O: usize, const I: bool>(
         &self,
         bt: B,
         n: &Node,
@@ -297,7 +304,7 @@ impl RayData {
 
 impl LeafRay {
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &Ray) -> Self {
         let wt = WatertightRay::new(ray);
         LeafRay {
             wt,
@@ -323,7 +330,7 @@ impl LeafRay {
     /// the test for them (the any-hit walk ignores them; they are dead code
     /// there once inlined).
     #[inline(always)]
-    fn triangles<B: BoxTest>(
+    pub(crate) fn triangles<B: BoxTest>(
         &self,
         bt: B,
         b: &Tri4,
@@ -436,7 +443,7 @@ fn lanes_of(b: &Tri4, id: u32) -> u32 {
 /// mask: a separate prefetch pass cost the any-hit walk 7% more
 /// instructions).
 #[inline(always)]
-fn prefetch_child(nodes: &[Node], tris: &[Tri4], c: u32) {
+pub(crate) fn prefetch_child(nodes: &[Node], tris: &[Tri4], c: u32) {
     if !is_leaf(c) {
         if let Some(n) = nodes.get(c as usize) {
             prefetch(n);
@@ -512,6 +519,78 @@ pub(crate) struct Closest {
     pub bary: Option<[f32; 3]>,
 }
 
+/// The upper end of the range a leaf tests once `best` is found: `tmax`
+/// itself (`best` is the closest so far, at `tmax`) taken inclusively, so
+/// that a hit at exactly the same `t` is seen and [`closer`] can break the
+/// tie. Hits are at `t > tmin ≥ −∞` and finite, and the next float above a
+/// finite `t` is the bit pattern one up for `t > 0` (`+inf` above the
+/// largest finite value); for `t ≤ 0` (a negative `tmin`) `next_up` is
+/// exact too.
+#[inline(always)]
+pub(crate) fn test_tmax(best: &Option<Closest>, tmax: f32) -> f32 {
+    if best.is_some() {
+        tmax.next_up()
+    } else {
+        tmax
+    }
+}
+
+/// Whether a hit `(t, id)` replaces `best` (at `tmax`): nearer, or as near
+/// with a smaller item id. The rule makes the closest hit a function of
+/// the ray and the set of items alone, not of the order the walk meets
+/// them in (brute force's order, by id, gives the same answer): a packet
+/// walk, which visits a ray's nodes in a different order than that ray's
+/// own walk, returns the very same hit.
+#[inline(always)]
+pub(crate) fn closer(best: &Option<Closest>, tmax: f32, t: f32, id: u32) -> bool {
+    match best {
+        None => true,
+        Some(b) => t < tmax || (t == tmax && id < b.id),
+    }
+}
+
+/// One leaf block for a closest-hit walk: its triangles (in `(tmin,
+/// test_tmax]`), then its other items, each kept by [`closer`]; `tmax`
+/// shrinks to the best hit's `t`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn leaf_block<B: BoxTest, F: Fallback + ?Sized>(
+    bt: B,
+    lr: &LeafRay,
+    b: &Tri4,
+    fallback: &F,
+    ray: &Ray,
+    tmin: f32,
+    tmax: &mut f32,
+    best: &mut Option<Closest>,
+) {
+    let (mut mask, t, bary) = lr.triangles(bt, b, tmin, test_tmax(best, *tmax), NO_ITEM);
+    while mask != 0 {
+        let i = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        if closer(best, *tmax, t[i], b.ids[i]) {
+            *tmax = t[i];
+            *best = Some(Closest {
+                t: t[i],
+                id: b.ids[i],
+                bary: Some([bary[0][i], bary[1][i], bary[2][i]]),
+            });
+        }
+    }
+    if b.has_other() {
+        for &id in &b.ids {
+            if id != NO_ITEM && id & OTHER != 0 {
+                let id = id & !OTHER;
+                let hit = fallback.intersect(id, ray, tmin, test_tmax(best, *tmax));
+                if let Some(t) = hit.filter(|&t| closer(best, *tmax, t, id)) {
+                    *tmax = t;
+                    *best = Some(Closest { t, id, bary: None });
+                }
+            }
+        }
+    }
+}
+
 /// The closest hit ([`Closest`]), with an `N`-entry stack ([`SHALLOW`]
 /// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
 /// AVX2 copy compiles it with AVX2.
@@ -569,30 +648,7 @@ pub(crate) fn closest<
                 if S::ENABLED {
                     n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
                 }
-                let (mut mask, t, bary) = lr.triangles(bt, b, tmin, tmax, NO_ITEM);
-                while mask != 0 {
-                    let i = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if t[i] < tmax {
-                        tmax = t[i];
-                        best = Some(Closest {
-                            t: t[i],
-                            id: b.ids[i],
-                            bary: Some([bary[0][i], bary[1][i], bary[2][i]]),
-                        });
-                    }
-                }
-                if b.has_other() {
-                    for &id in &b.ids {
-                        if id != NO_ITEM && id & OTHER != 0 {
-                            let id = id & !OTHER;
-                            if let Some(t) = fallback.intersect(id, &rd.ray, tmin, tmax) {
-                                tmax = t;
-                                best = Some(Closest { t, id, bary: None });
-                            }
-                        }
-                    }
-                }
+                leaf_block(bt, lr, b, fallback, &rd.ray, tmin, &mut tmax, &mut best);
             }
         }
         // Pop the nearest pending child that can still hold a closer hit.

@@ -5,11 +5,13 @@
 //!
 //! Timing follows Embree's harness: the best of five builds; per ray set one
 //! warm-up pass, then the best of three passes; rays are handed out in
-//! chunks of 4096 to the worker threads.
+//! chunks of 4096 to the worker threads. Packets as the harness makes them
+//! for `rtcIntersect8`/`rtcOccluded8`: camera rays in tiles of 4×2 pixels of
+//! the 1024-pixel-wide image, shadow rays eight consecutive ones at a time.
 
 use glint::format::obj::load_obj;
 use glint::math::{Ray, Vec3};
-use glint::query::MeshScene;
+use glint::query::{MeshScene, PacketRay, PACKET};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -107,6 +109,98 @@ fn pass(scene: &MeshScene, rays: &[RayRec], shadow: bool) -> Sums {
         .reduce(Sums::default, |a, b| a + b)
 }
 
+/// Width of the anchors' camera image (`raygen.c`), whose rays the
+/// primary file holds row by row.
+const IMAGE_WIDTH: usize = 1024;
+
+/// The camera rays as packets of 4×2-pixel tiles, tile rows top to bottom
+/// (Embree's harness's order); `None` unless the rays fill whole rows of
+/// tiles.
+fn camera_tiles(rays: &[RayRec]) -> Option<Vec<[PacketRay; PACKET]>> {
+    if rays.is_empty() || !rays.len().is_multiple_of(2 * IMAGE_WIDTH) {
+        return None;
+    }
+    let per_row = IMAGE_WIDTH / 4;
+    let tiles = rays.len() / PACKET;
+    Some(
+        (0..tiles)
+            .map(|k| {
+                let (ty, tx) = (k / per_row, k % per_row);
+                std::array::from_fn(|l| {
+                    let r = &rays[(2 * ty + l / 4) * IMAGE_WIDTH + 4 * tx + l % 4];
+                    PacketRay {
+                        ray: r.ray,
+                        tmin: r.tmin,
+                        tmax: r.tmax,
+                    }
+                })
+            })
+            .collect(),
+    )
+}
+
+/// Rays eight consecutive ones at a time (the last packet may be short).
+fn consecutive(rays: &[RayRec]) -> Vec<Vec<PacketRay>> {
+    rays.chunks(PACKET)
+        .map(|c| {
+            c.iter()
+                .map(|r| PacketRay {
+                    ray: r.ray,
+                    tmin: r.tmin,
+                    tmax: r.tmax,
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// One pass of packets (closest hits, or occlusion for `shadow`), 512
+/// packets (4096 rays) handed out at a time.
+fn packet_pass<P: AsRef<[PacketRay]> + Sync>(
+    scene: &MeshScene,
+    packets: &[P],
+    shadow: bool,
+) -> Sums {
+    packets
+        .par_chunks(CHUNK / PACKET)
+        .map(|chunk| {
+            let mut s = Sums::default();
+            let mut out = [None; PACKET];
+            for p in chunk {
+                let p = p.as_ref();
+                if shadow {
+                    s.hits += u64::from(scene.occluded_packet(p).count_ones());
+                } else {
+                    scene.intersect_packet(p, &mut out);
+                    for h in out[..p.len()].iter().flatten() {
+                        s.hits += 1;
+                        s.tsum += f64::from(h.t);
+                    }
+                }
+            }
+            s
+        })
+        .reduce(Sums::default, |a, b| a + b)
+}
+
+/// [`measure`] for packets.
+fn measure_packets<P: AsRef<[PacketRay]> + Sync>(
+    scene: &MeshScene,
+    packets: &[P],
+    shadow: bool,
+) -> (f64, Sums) {
+    let sums = packet_pass(scene, packets, shadow);
+    let best = (0..3)
+        .map(|_| {
+            let t = Instant::now();
+            packet_pass(scene, packets, shadow);
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min);
+    let rays: usize = packets.iter().map(|p| p.as_ref().len()).sum();
+    (rays as f64 / best / 1e6, sums)
+}
+
 /// Warm-up, then the best of three: Mrays/s and the checksums.
 fn measure(scene: &MeshScene, rays: &[RayRec], shadow: bool) -> (f64, Sums) {
     let sums = pass(scene, rays, shadow);
@@ -154,6 +248,12 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
     let (mp, p) = measure(&scene, &primary, false);
     let (mi, i) = measure(&scene, &incoherent, false);
     let (ms, s) = measure(&scene, &shadow, true);
+    let tiles = camera_tiles(&primary);
+    let (mp8, p8) = match &tiles {
+        Some(t) => measure_packets(&scene, t, false),
+        None => (f64::NAN, Sums::default()),
+    };
+    let (ms8, s8) = measure_packets(&scene, &consecutive(&shadow), true);
     let threads = rayon::current_num_threads();
     if a.stats {
         for (name, rays, shadow) in [
@@ -176,6 +276,26 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
                 c.intersection_tests as f64 / n
             );
         }
+        let packets = |name: &str, c: glint::stats::Counters, n: usize| {
+            let n = n.max(1) as f64;
+            eprintln!(
+                "  {name:10} {:.2} node visits/ray (one per packet), {:.1} triangles tested/ray",
+                c.nodes_visited as f64 / n,
+                c.intersection_tests as f64 / n
+            );
+        };
+        if let Some(t) = &tiles {
+            let mut c = glint::stats::Counters::default();
+            let mut out = [None; PACKET];
+            t.iter()
+                .for_each(|p| scene.intersect_packet_with(p, &mut out, &mut c));
+            packets("primary packets", c, primary.len());
+        }
+        let mut c = glint::stats::Counters::default();
+        for p in consecutive(&shadow) {
+            scene.occluded_packet_with(&p, &mut c);
+        }
+        packets("shadow packets", c, shadow.len());
     }
     if a.json {
         let v = serde_json::json!({
@@ -187,6 +307,8 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
             "primary": {"mrays": mp, "hits": p.hits, "tsum": p.tsum},
             "incoherent": {"mrays": mi, "hits": i.hits, "tsum": i.tsum},
             "shadow": {"mrays": ms, "occluded": s.hits},
+            "primary_packets": {"mrays": mp8, "hits": p8.hits, "tsum": p8.tsum},
+            "shadow_packets": {"mrays": ms8, "occluded": s8.hits},
         });
         println!("{v}");
     } else {
@@ -208,6 +330,17 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
         println!(
             "  shadow     {ms:8.2} Mrays/s  occluded={} of {}",
             s.hits,
+            shadow.len()
+        );
+        if tiles.is_some() {
+            println!(
+                "  primary, packets of 4x2 pixels {mp8:8.2} Mrays/s  hits={} tsum={:.6}",
+                p8.hits, p8.tsum
+            );
+        }
+        println!(
+            "  shadow, packets of 8           {ms8:8.2} Mrays/s  occluded={} of {}",
+            s8.hits,
             shadow.len()
         );
     }

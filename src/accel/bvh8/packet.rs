@@ -1,0 +1,475 @@
+//! Packets: up to eight rays walked through the tree together, for rays
+//! that go the same way (a tile's camera rays, shadow rays towards one
+//! light). Per node, one box test for the whole packet ([`Frustum`]: slab
+//! bounds from the extremes of the rays' `1 / dir` and `origin · inv`,
+//! which keep every box any ray's own test keeps); per leaf's box, each
+//! ray's own test; per leaf, each ray's own triangle test
+//! (`traverse::leaf_block`). What the packet saves is the node work: one
+//! box test and one ordering a node for all its rays.
+//!
+//! Same hits as single rays, bit for bit: a ray's closest hit is the
+//! nearest of the items in the leaves it tests, which hold every item the
+//! ray meets in its range, the tie between two items at the same `t` going
+//! to the smaller id (`traverse::closer`), whatever the order of the
+//! visit; an any-hit answer is a yes or a no.
+//!
+//! Packets whose rays do not share an octant or whose directions spread
+//! too far for tight bounds ([`MAX_SPREAD`]), and rays the single walk
+//! would take off the integer reduction (`RayData::reduce_as_ints`: a
+//! negative `tmin`, an origin far out), are walked one ray at a time.
+
+use super::lanes::{Lanes, W};
+use super::node::{is_leaf, leaf_range, Node, Tri4, EMPTY, NO_ITEM, OTHER};
+use super::traverse::{
+    self, leaf_block, prefetch_child, BoxTest, Closest, Fallback, LeafRay, RayData, ANY_OCTANT,
+};
+use crate::math::Ray;
+use crate::stats::TraversalStats;
+
+/// Most rays in a packet.
+pub const PACKET: usize = 8;
+
+/// The largest spread of a packet's `1 / d` along an axis, relative to
+/// its smallest magnitude, that the packet walk takes (see
+/// [`Frustum::new`]).
+const MAX_SPREAD: f32 = 0.125;
+
+/// One ray of a packet: the ray and its `(tmin, tmax)` range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PacketRay {
+    /// The ray.
+    pub ray: Ray,
+    /// Hits must lie beyond this.
+    pub tmin: f32,
+    /// Hits must lie before this.
+    pub tmax: f32,
+}
+
+/// The packet as a whole, for rays that share an octant: each ray's `1 /
+/// dir` and `origin · inv` (one lane per ray, for the exact per-ray test
+/// of a leaf's box) and their extremes over the packet (for one test of a
+/// node's eight boxes on behalf of every ray).
+///
+/// Why one test serves all: a slab distance is `fma(plane, inv, −oi)`,
+/// rounded once; the exact value grows with `inv` when `plane ≥ 0` (falls
+/// when `plane < 0`) and falls as `oi` grows, and rounding keeps that
+/// order. So `fma(plane, inv_lo or inv_hi, −oi_hi)`, the extremes picked
+/// by the plane's sign, is at most every ray's own near distance, and the
+/// mirror image at least every ray's far distance; a box whose bounds
+/// fail `tn ≤ tf` (with the smallest `tmin` and largest `tmax`) fails
+/// every ray's own test too. The rays share an octant, so the near plane
+/// of an axis is the same one for all. Entry bounds are never NaN: walked
+/// rays have finite `oi` and finite, non-zero `inv` (`reduce_as_ints`),
+/// planes are finite or `±inf`.
+struct Frustum {
+    inv: [Lanes; 3],
+    oi: [Lanes; 3],
+    tmin: Lanes,
+    inv_lo: [Lanes; 3],
+    inv_hi: [Lanes; 3],
+    oi_lo: [Lanes; 3],
+    oi_hi: [Lanes; 3],
+    tmin_lo: Lanes,
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+impl Frustum {
+    /// The packet of `rays` and the rays it walks (bit `r`): those the
+    /// single walk takes on its integer path (`RayData::reduce_as_ints`);
+    /// `None` for the packet if those do not share an octant. Filler
+    /// lanes copy the first walked ray.
+    #[inline(always)]
+    fn new(rays: &[PacketRay]) -> (Option<Frustum>, u32) {
+        let mut v = [[0f32; PACKET]; 7];
+        let (mut walked, mut octant, mut mixed) = (0u32, None, false);
+        for (r, q) in rays.iter().enumerate() {
+            let (inv, oi) = RayData::inv_oi(&q.ray);
+            if !(oi.is_finite() && q.tmin >= 0.0 && q.tmin.is_sign_positive()) {
+                continue;
+            }
+            walked |= 1 << r;
+            let neg = |a: usize| usize::from(inv[a].is_sign_negative()) << a;
+            let o = neg(0) | neg(1) | neg(2);
+            mixed |= octant.is_some_and(|x| x != o);
+            octant = Some(o);
+            for a in 0..3 {
+                v[a][r] = inv[a];
+                v[3 + a][r] = oi[a];
+            }
+            v[6][r] = q.tmin;
+        }
+        let Some(octant) = octant.filter(|_| !mixed) else {
+            return (None, walked);
+        };
+        let first = walked.trailing_zeros() as usize;
+        let lanes = |k: usize| {
+            let mut l = Lanes::splat(v[k][first]);
+            let (mut lo, mut hi) = (v[k][first], v[k][first]);
+            for r in 0..PACKET {
+                if walked >> r & 1 != 0 {
+                    l[r] = v[k][r];
+                    lo = lo.min(v[k][r]);
+                    hi = hi.max(v[k][r]);
+                }
+            }
+            (l, Lanes::splat(lo), Lanes::splat(hi))
+        };
+        let [x, y, z, ox, oy, oz, t] = std::array::from_fn(lanes);
+        // Directions that differ much along an axis (the bounds of a
+        // component's `1 / d` far apart relative to its size) make the
+        // bounds loose: the packet would enter boxes none of its rays
+        // enters. Such packets are walked one ray at a time.
+        let tight = |l: &(Lanes, Lanes, Lanes)| {
+            let (lo, hi) = (l.1[0], l.2[0]);
+            hi - lo <= MAX_SPREAD * lo.abs().min(hi.abs())
+        };
+        if ![&x, &y, &z].into_iter().all(tight) {
+            return (None, walked);
+        }
+        let s = |a: usize| (octant >> a) & 1;
+        let f = Frustum {
+            inv: [x.0, y.0, z.0],
+            oi: [ox.0, oy.0, oz.0],
+            tmin: t.0,
+            inv_lo: [x.1, y.1, z.1],
+            inv_hi: [x.2, y.2, z.2],
+            oi_lo: [ox.1, oy.1, oz.1],
+            oi_hi: [ox.2, oy.2, oz.2],
+            tmin_lo: t.1,
+            near: [3 * s(0), 1 + 3 * s(1), 2 + 3 * s(2)],
+            far: [3 - 3 * s(0), 4 - 3 * s(1), 5 - 3 * s(2)],
+        };
+        (Some(f), walked)
+    }
+
+    /// The boxes of `n` some ray of the packet may enter before `tmax_hi`
+    /// (its largest `tmax`), and a lower bound of the rays' entry
+    /// distances per box.
+    #[inline(always)]
+    fn boxes(&self, n: &Node, tmax_hi: f32) -> (u32, Lanes) {
+        let p = &n.planes;
+        let near = |a: usize| {
+            let pl = p[self.near[a]];
+            pl.mul_sub(pl.by_sign(self.inv_hi[a], self.inv_lo[a]), self.oi_hi[a])
+        };
+        let far = |a: usize| {
+            let pl = p[self.far[a]];
+            pl.mul_sub(pl.by_sign(self.inv_lo[a], self.inv_hi[a]), self.oi_lo[a])
+        };
+        let tn = near(0).max(near(1)).max(near(2).max(self.tmin_lo));
+        let tf = far(0).min(far(1)).min(far(2).min(Lanes::splat(tmax_hi)));
+        (tn.le_mask(tf), tn)
+    }
+
+    /// The rays (a mask) that enter child `c`'s box of `n` within their own
+    /// `(tmin, tmax)`: each ray's own float slab test (the same fused
+    /// products as `RayData::boxes`, so the same distances), whose
+    /// boxes include those of its integer form.
+    #[inline(always)]
+    fn rays_into(&self, n: &Node, c: usize, tmax: Lanes) -> u32 {
+        let p = &n.planes;
+        let t = |k: usize, a: usize| Lanes::splat(p[k][c]).mul_sub(self.inv[a], self.oi[a]);
+        let tn = t(self.near[0], 0)
+            .max(t(self.near[1], 1))
+            .max(t(self.near[2], 2).max(self.tmin));
+        let tf = t(self.far[0], 0)
+            .min(t(self.far[1], 1))
+            .min(t(self.far[2], 2).min(tmax));
+        tn.le_mask(tf)
+    }
+}
+
+/// The closest hit of each ray of `rays` (at most [`PACKET`]) into
+/// `out[..rays.len()]`, with an `N`-entry stack (as `traverse::closest`).
+/// A packet [`Frustum::new`] accepts takes the packet walk (one box test
+/// per node for the packet, each ray's own test at leaves' boxes); other
+/// packets, and rays off the integer path, the single walk. Always
+/// inlined, so that `dispatch`'s AVX2 copy compiles it with AVX2.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    out: &mut [Option<Closest>],
+    stats: &mut S,
+) {
+    let out = &mut out[..rays.len()];
+    out.fill(None);
+    if nodes.is_empty() || rays.is_empty() {
+        return;
+    }
+    let (f, walked) = Frustum::new(rays);
+    let walked = if f.is_some() { walked } else { 0 };
+    for (r, q) in rays.iter().enumerate() {
+        if walked & 1 << r == 0 {
+            let rd = &RayData::new(&q.ray);
+            out[r] = traverse::closest::<S, F, B, N, ANY_OCTANT, false>(
+                bt, nodes, tris, fallback, rd, q.tmin, q.tmax, stats,
+            );
+        }
+    }
+    if let Some(f) = f {
+        closest_frustum::<S, F, B, N>(bt, nodes, tris, fallback, rays, &f, walked, out, stats)
+    }
+}
+
+/// Which rays of `rays` something but triangle `skip[r]` blocks (bit `r`;
+/// `skip` empty or one id per ray, [`NO_ITEM`] for none), as
+/// `traverse::any` answers for each; the walks chosen as in [`closest`].
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    skip: &[u32],
+    stats: &mut S,
+) -> u32 {
+    if nodes.is_empty() || rays.is_empty() {
+        return 0;
+    }
+    debug_assert!(skip.is_empty() || skip.len() == rays.len());
+    let (f, walked) = Frustum::new(rays);
+    let walked = if f.is_some() { walked } else { 0 };
+    let mut hit = 0u32;
+    for (r, q) in rays.iter().enumerate() {
+        if walked & 1 << r == 0 {
+            let rd = &RayData::new(&q.ray);
+            let skip = skip.get(r).copied().unwrap_or(NO_ITEM);
+            let h = traverse::any::<S, F, B, N, ANY_OCTANT, false>(
+                bt, nodes, tris, fallback, rd, q.tmin, q.tmax, skip, stats,
+            );
+            hit |= u32::from(h) << r;
+        }
+    }
+    match f {
+        Some(f) => {
+            hit | any_frustum::<S, F, B, N>(
+                bt, nodes, tris, fallback, rays, skip, &f, walked, stats,
+            )
+        }
+        None => hit,
+    }
+}
+
+/// The rays of `active` entering each child in `mask` of `node`: all of
+/// them for an inner node (its own test sorts them out), each ray's own
+/// test for a leaf.
+#[inline(always)]
+fn child_rays(f: &Frustum, node: &Node, i: usize, active: u32, tmax: Lanes) -> u32 {
+    if is_leaf(node.child[i]) {
+        f.rays_into(node, i, tmax) & active
+    } else {
+        active
+    }
+}
+
+/// The closest-hit walk of a packet sharing an octant (see [`Frustum`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    f: &Frustum,
+    walked: u32,
+    out: &mut [Option<Closest>],
+    stats: &mut S,
+) {
+    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let mut tmax = Lanes::splat(0.0);
+    for (r, q) in rays.iter().enumerate() {
+        tmax[r] = q.tmax;
+    }
+    let mut best: [Option<Closest>; PACKET] = [None; PACKET];
+    let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
+    let mut stack = [(0u32, 0u32, 0f32); N];
+    let mut sp = 0usize;
+    let (mut cur, mut active) = (0u32, walked);
+    while active != 0 {
+        if !is_leaf(cur) {
+            let node = &nodes[cur as usize];
+            if S::ENABLED {
+                n_nodes += 1;
+            }
+            let (mut mask, dist) = f.boxes(node, tmax.max_of(active));
+            let dist = dist.to_array();
+            // Nearest first: the others pushed far to near.
+            let mut kids = [(0u32, 0u32, 0f32); W];
+            let mut k = 0;
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let m = child_rays(f, node, i, active, tmax);
+                if m == 0 {
+                    continue;
+                }
+                let e = (node.child[i], m, dist[i]);
+                prefetch_child(nodes, tris, e.0);
+                let mut j = k;
+                while j > 0 && kids[j - 1].2 < e.2 {
+                    kids[j] = kids[j - 1];
+                    j -= 1;
+                }
+                kids[j] = e;
+                k += 1;
+            }
+            if k > 0 {
+                for &e in &kids[..k - 1] {
+                    stack[sp] = e;
+                    sp += 1;
+                }
+                (cur, active) = (kids[k - 1].0, kids[k - 1].1);
+                continue;
+            }
+        } else if cur != EMPTY {
+            let (start, count) = leaf_range(cur);
+            let mut todo = active;
+            while todo != 0 {
+                let r = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let q = &rays[r];
+                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray));
+                let mut t = tmax[r];
+                for b in &tris[start..start + count] {
+                    if S::ENABLED {
+                        n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
+                    }
+                    leaf_block(bt, lr, b, fallback, &q.ray, q.tmin, &mut t, &mut best[r]);
+                }
+                tmax[r] = t;
+            }
+        }
+        // Pop the nearest pending child that some ray can still find a
+        // closer hit in (the entry's distance is below each ray's own).
+        active = 0;
+        while sp > 0 {
+            sp -= 1;
+            let (c, m, d) = stack[sp];
+            let keep = Lanes::splat(d).le_mask(tmax) & m;
+            if keep != 0 {
+                (cur, active) = (c, keep);
+                break;
+            }
+        }
+    }
+    for (r, o) in out.iter_mut().enumerate() {
+        if walked & 1 << r != 0 {
+            *o = best[r];
+        }
+    }
+    stats.add(n_nodes, n_tests);
+}
+
+/// The any-hit walk of a packet sharing an octant (see [`Frustum`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+    bt: B,
+    nodes: &[Node],
+    tris: &[Tri4],
+    fallback: &F,
+    rays: &[PacketRay],
+    skip: &[u32],
+    f: &Frustum,
+    walked: u32,
+    stats: &mut S,
+) -> u32 {
+    let skip_of = |r: usize| skip.get(r).copied().unwrap_or(NO_ITEM);
+    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let mut tmax = Lanes::splat(0.0);
+    for (r, q) in rays.iter().enumerate() {
+        tmax[r] = q.tmax;
+    }
+    let tmax_hi = tmax.max_of(walked);
+    let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
+    let mut stack = [(0u32, 0u32); N];
+    let mut sp = 0usize;
+    let mut hit = 0u32;
+    // Rays still looking for a hit, and those in the current subtree.
+    let mut open = walked;
+    let (mut cur, mut active) = (0u32, walked);
+    loop {
+        if !is_leaf(cur) {
+            let node = &nodes[cur as usize];
+            if S::ENABLED {
+                n_nodes += 1;
+            }
+            let (mut mask, _) = f.boxes(node, tmax_hi);
+            let mut next = None;
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let m = child_rays(f, node, i, active, tmax);
+                if m == 0 {
+                    continue;
+                }
+                prefetch_child(nodes, tris, node.child[i]);
+                if next.is_none() {
+                    next = Some((node.child[i], m));
+                } else {
+                    stack[sp] = (node.child[i], m);
+                    sp += 1;
+                }
+            }
+            if let Some((c, m)) = next {
+                (cur, active) = (c, m);
+                continue;
+            }
+        } else if cur != EMPTY {
+            let (start, count) = leaf_range(cur);
+            let mut todo = active;
+            while todo != 0 {
+                let r = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let q = &rays[r];
+                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray));
+                for b in &tris[start..start + count] {
+                    if S::ENABLED {
+                        n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
+                    }
+                    let blocked = lr.triangles(bt, b, q.tmin, q.tmax, skip_of(r)).0 != 0
+                        || (b.has_other()
+                            && b.ids.iter().any(|&id| {
+                                id != NO_ITEM
+                                    && id & OTHER != 0
+                                    && fallback
+                                        .intersect(id & !OTHER, &q.ray, q.tmin, q.tmax)
+                                        .is_some()
+                            }));
+                    if blocked {
+                        hit |= 1 << r;
+                        open &= !(1 << r);
+                        break;
+                    }
+                }
+            }
+        }
+        active = 0;
+        while sp > 0 && open != 0 {
+            sp -= 1;
+            let (c, m) = stack[sp];
+            if m & open != 0 {
+                (cur, active) = (c, m & open);
+                break;
+            }
+        }
+        if active == 0 {
+            break;
+        }
+    }
+    stats.add(n_nodes, n_tests);
+    hit
+}
+
+#[cfg(test)]
+#[path = "packet_tests.rs"]
+mod tests;
