@@ -70,9 +70,9 @@ pub struct ServeArgs {
     /// Samples per pixel the progressive render refines to.
     #[arg(long, default_value_t = 64)]
     pub spp: u32,
-    /// Accelerator the page starts with.
-    #[arg(long, default_value = "bvh")]
-    pub accel: String,
+    /// Accelerator the page starts with (the same names and default as `glint render --accel`).
+    #[arg(long, default_value = "bvh8")]
+    pub accel: glint::accel::AccelKind,
 }
 
 /// Runs `glint serve` until Ctrl-C.
@@ -84,7 +84,7 @@ pub fn run(a: ServeArgs) -> ExitCode {
         shadows: a.shadows,
         shade_back: a.shade_back,
         spp: a.spp,
-        accel: a.accel.clone(),
+        accel: a.accel.to_string(),
     };
     match serve(&a.scene, a.root.as_deref(), Some(a.port), defaults, "glint") {
         Ok(()) => ExitCode::SUCCESS,
