@@ -366,6 +366,27 @@ fn accelerators_and_default_agree_with_glint_render() {
     assert_eq!(default_of("serve"), "[default: bvh8]");
 }
 
+/// Without `--port`, a taken 8837 is no error: the server listens on
+/// another free port and prints it. With `--port 8837` it is (exit 2).
+#[test]
+fn a_taken_default_port_falls_back() {
+    // Taken by this test, or already by someone else: taken either way.
+    let _held = std::net::TcpListener::bind("127.0.0.1:8837");
+    let scene = common::own_scene("whitted.txt");
+    let s = Server::start(
+        env!("CARGO_BIN_EXE_glint"),
+        &["serve", scene.to_str().unwrap()],
+    );
+    assert_ne!(s.addr, "127.0.0.1:8837");
+    assert_eq!(s.json("/api/status")["loaded"], true);
+    let o = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["serve", scene.to_str().unwrap(), "--port", "8837"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("8837"));
+}
+
 /// Bad parameters get a 400 naming what is wrong; nothing renders.
 #[test]
 fn bad_parameters_are_refused_with_a_message() {

@@ -46,9 +46,9 @@ const STYLE_CSS: &str = include_str!("page/style.css");
 pub struct ServeArgs {
     /// Scene file (MIT 6.837 format).
     pub scene: PathBuf,
-    /// Port on 127.0.0.1 (0: any free port; the address is printed).
-    #[arg(long, default_value_t = DEFAULT_PORT)]
-    pub port: u16,
+    /// Port on 127.0.0.1 (0: any free port; the address is printed). Default: 8837, or any free port when 8837 is taken.
+    #[arg(long)]
+    pub port: Option<u16>,
     /// Folder every file the scene reads must be inside (default: the scene's folder).
     #[arg(long, value_name = "DIR")]
     pub root: Option<PathBuf>,
@@ -86,7 +86,7 @@ pub fn run(a: ServeArgs) -> ExitCode {
         spp: a.spp,
         accel: a.accel.to_string(),
     };
-    match serve(&a.scene, a.root.as_deref(), Some(a.port), defaults, "glint") {
+    match serve(&a.scene, a.root.as_deref(), a.port, defaults, "glint") {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
             eprintln!("glint: {}", glint::limits::bounded_message(&msg));
