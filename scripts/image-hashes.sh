@@ -4,6 +4,8 @@
 #
 #   scripts/image-hashes.sh [COMMIT]     print "name sha256" for every output file of COMMIT (default HEAD)
 #   scripts/image-hashes.sh OLD NEW      both lists side by side: same / DIFFERENT; exit 1 on any difference
+#   scripts/image-hashes.sh --build C    only build C's binaries; print their folder (scripts/bench-ab.sh)
+#   IMAGE_HASHES_ONLY=REGEX              only the runs whose folder matches (e.g. 'tent|pieces|A7-5')
 #
 # COMMIT is anything `git rev-parse` takes; `.` is the working tree as it is (uncommitted edits too).
 # Each commit's release binaries are built in a temporary git worktree, with one cargo target
@@ -68,6 +70,7 @@ build() {
 run_into() {
   local out=$1
   shift
+  [[ $out =~ ${IMAGE_HASHES_ONLY:-.} ]] || return 0
   mkdir -p "$out"
   local rc=0
   (cd "$out" && "$@" >/dev/null 2>stderr.txt) || rc=$?
@@ -135,15 +138,21 @@ render_all() {
       read -ra a <<<"$line"
       [ "${#a[@]}" -gt 1 ] || continue
       a=("${a[@]:1}")
+      # -gui starts the browser view (and, without -output, waits in it):
+      # the lines are rendered without it.
+      for i in "${!a[@]}"; do
+        [ "${a[$i]}" = -gui ] && unset 'a[i]'
+      done
+      a=("${a[@]}")
       for i in "${!a[@]}"; do
         [ "${a[$i]}" = -input ] && a[$((i + 1))]=$course/${a[$((i + 1))]}
       done
       local id
       id=$(basename "$cmd" _cmd.txt)-$(printf %02d "$k")
-      run_into "$out/course/$id" "$bin/raytracer" "${a[@]}" -stats_json stats.json -quiet
+      run_into "$out/course/$id" "$bin/raytracer" "${a[@]}" -stats_json stats.json -quiet </dev/null
       if ! grep -qE -- '-[a-z_]+_(samples|filter)|-adaptive' <<<"$line"; then
         run_into "$out/course/$id-spp16" "$bin/raytracer" "${a[@]}" -jittered_samples 16 \
-          -stats_json stats.json -quiet
+          -stats_json stats.json -quiet </dev/null
       fi
     done <"$cmd"
   done
@@ -171,6 +180,11 @@ hashes_of() {
   rm -rf "$work"
 }
 
+if [ "${1:-}" = --build ]; then
+  # For other scripts (bench-ab.sh): only build; print the binaries' folder.
+  build "${2:?usage: scripts/image-hashes.sh --build COMMIT}"
+  exit
+fi
 case $# in
   0 | 1) hashes_of "${1:-HEAD}" ;;
   2)

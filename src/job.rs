@@ -568,11 +568,6 @@ impl Job {
         if let Some(p) = &self.piece {
             self.check_piece(p)?;
         }
-        if self.cost_image.is_some() && self.adaptive.is_some() {
-            return Err(JobError::Usage(
-                "--cost-image does not work with --adaptive: adaptive sampling shares its corner rays between pixels, so their cost belongs to no single pixel".into(),
-            ));
-        }
         let t_load = Instant::now();
         let (mut scene, files) = load_scene_files(&self.input)?;
         if self.smooth {

@@ -35,6 +35,7 @@ mod sampling_reference;
 mod scene_props;
 mod serve;
 mod textures;
+mod toy_integrator;
 mod viz_cost;
 mod viz_grid;
 mod viz_traversal;

@@ -605,16 +605,7 @@ pub fn check_scene(name: &str, scene: &Scene, opts: BuildOptions) -> Vec<String>
             for i in 0..w {
                 let ray = camera.ray(screen_point(i, j, PixelOffset::CENTER.0, w, h));
                 let mut c = Counters::default();
-                integrator.trace(
-                    &world,
-                    &ray,
-                    camera.tmin(),
-                    RayKind::Primary,
-                    0,
-                    1.0,
-                    &mut c,
-                    &mut obs,
-                );
+                crate::common::eye_ray(&integrator, &world, &ray, camera.tmin(), &mut c, &mut obs);
             }
         }
         if let Some(bad) = obs.bad {

@@ -3,8 +3,8 @@
 //! Every expected value here comes from a formula written out in the test
 //! (Snell's law in angles, the critical angle, products of coefficients,
 //! `1/(a + b·d + c·d²)`, the half vector), never from glint's own optics or
-//! shading functions; what is measured is what `Whitted::trace` does to a real
-//! world, watched through a `RayRecorder`. Worlds are built in world space so
+//! shading functions; what is measured is what the Whitted integrator does to
+//! a real world's eye ray (`common::eye_ray`), watched through a `RayRecorder`. Worlds are built in world space so
 //! the numbers in the scenes are the numbers the formulas use. Area lights
 //! are checked through `light::sample_light`, the sampling the ray tree calls.
 
@@ -59,16 +59,7 @@ fn glass(ior: f32) -> Phong {
 /// Traces `ray` from the eye (depth 0, weight 1), recording every ray.
 fn trace(world: &World, w: &Whitted, ray: Ray) -> (Vec3, Vec<RecordedRay>) {
     let mut rec = RayRecorder::default();
-    let (c, _) = w.trace(
-        world,
-        &ray,
-        0.0,
-        RayKind::Primary,
-        0,
-        1.0,
-        &mut Counters::default(),
-        &mut rec,
-    );
+    let (c, _) = crate::common::eye_ray(w, world, &ray, 0.0, &mut Counters::default(), &mut rec);
     (c, rec.rays)
 }
 

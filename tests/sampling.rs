@@ -8,9 +8,9 @@ use crate::common;
 use glint::format::load_scene;
 use glint::integrator::Whitted;
 use glint::math::Vec3;
-use glint::render::legacy::render_rows;
 use glint::render::{
-    render_image, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Settings,
+    render_image, render_region, Adaptive, CameraModel, Control, Filter, Frame, PixelOffset, Rect,
+    Settings,
 };
 use glint::sampler::{GridLayout, Sampler, SamplerKind};
 use glint::scene::{Node, Scene};
@@ -63,12 +63,13 @@ fn sampled(size: (u32, u32), kind: SamplerKind, spp: u32, filter: Filter) -> Set
     }
 }
 
-/// At one sample per pixel the tile loop gives the old row loop's image bit
-/// for bit (colour, depth, normals), at the centre and at the corner, on a
-/// size that is not a multiple of the tile.
+/// At one sample per pixel the band loop (one ray, written in place) gives
+/// the tiled path's image bit for bit (colour, depth, normals) and its
+/// counters, at the centre and at the corner, on course scenes and a size
+/// that is not a multiple of the tile or the band.
 #[test]
-fn one_sample_per_pixel_equals_the_old_loop() {
-    let Some(dir) = common::scenes("one_sample_per_pixel_equals_the_old_loop") else {
+fn one_sample_per_pixel_bands_equal_tiles() {
+    let Some(dir) = common::scenes("one_sample_per_pixel_bands_equal_tiles") else {
         return;
     };
     for name in [
@@ -79,8 +80,16 @@ fn one_sample_per_pixel_equals_the_old_loop() {
         let (world, cam) = world_of(&scene);
         for offset in [PixelOffset::CENTER, PixelOffset::CORNER] {
             let size = (77, 45);
-            let (old, oc) = render_rows(&world, &cam, &whitted(), size, offset);
-            let (new, nc) = render(&world, &cam, &whitted(), &Settings::one_ray(size, offset));
+            let s = Settings::one_ray(size, offset);
+            let whole = Rect {
+                x0: 0,
+                row0: 0,
+                x1: size.0,
+                row1: size.1,
+            };
+            let tiled = render_region(&world, &cam, &whitted(), &s, Control::default(), whole);
+            let (old, oc) = (tiled.frame, tiled.counters);
+            let (new, nc) = render(&world, &cam, &whitted(), &s);
             assert_eq!(oc, nc, "{name}: counters");
             let bits = |f: &Frame| {
                 f.color

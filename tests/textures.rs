@@ -32,7 +32,7 @@
 use crate::common::*;
 
 use glint::format::load_scene;
-use glint::integrator::{NoObserver, RayKind, Whitted};
+use glint::integrator::{NoObserver, Whitted};
 use glint::math::{Mat4, Vec2, Vec3};
 use glint::output::to_byte;
 use glint::render::CameraModel;
@@ -157,18 +157,15 @@ fn trace_points(scene: &Scene, integrator: &Whitted, (w, h): (u32, u32), step: u
                 // The reference's framing: each axis spans [0, 1] on its own.
                 let s = Vec2::new(i as f32 / w as f32, j as f32 / h as f32);
                 let mut c = Counters::default();
-                integrator
-                    .trace(
-                        world,
-                        &camera.ray(s),
-                        camera.tmin(),
-                        RayKind::Primary,
-                        0,
-                        1.0,
-                        &mut c,
-                        &mut NoObserver,
-                    )
-                    .0
+                crate::common::eye_ray(
+                    integrator,
+                    world,
+                    &camera.ray(s),
+                    camera.tmin(),
+                    &mut c,
+                    &mut NoObserver,
+                )
+                .0
             })
         })
         .collect()
@@ -395,7 +392,7 @@ fn documentation_examples_parse() {
 /// world-space lookups (the 6.837 convention) it stays put in the world.
 #[test]
 fn object_space_textures_follow_their_object() {
-    use glint::integrator::{NoObserver, RayKind};
+    use glint::integrator::NoObserver;
     use glint::material::TextureSpace;
     use glint::math::{Mat4, Ray, Vec3};
     use glint::scene::{Background, Camera, Material, Node, Phong, Scene, ShapeDesc, TextureKind};
@@ -451,13 +448,11 @@ fn object_space_textures_follow_their_object() {
             ..Whitted::default()
         };
         let ray = world.ray_from_world(&Ray::new(Vec3::new(x, 0.5, 5.0), Vec3::NEG_Z));
-        w.trace(
+        crate::common::eye_ray(
+            &w,
             &world,
             &ray,
             0.0,
-            RayKind::Primary,
-            0,
-            1.0,
             &mut Counters::default(),
             &mut NoObserver,
         )

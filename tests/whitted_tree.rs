@@ -125,13 +125,11 @@ fn floor_below_sphere(scene: &Scene, w: Whitted) -> Vec3 {
         Vec3::new(0.0, 0.1, 3.0),
         Vec3::new(0.0, -0.1, -3.0).normalize(),
     ));
-    let (c, hit) = w.trace(
+    let (c, hit) = crate::common::eye_ray(
+        &w,
         &world,
         &eye,
         0.0,
-        RayKind::Primary,
-        0,
-        1.0,
         &mut Counters::default(),
         &mut NoObserver,
     );
@@ -214,16 +212,7 @@ fn count_reflections(w: Whitted) -> (u32, Vec3) {
     let world = World::build(&scene, BuildOptions::default());
     let mut rec = RayRecorder::default();
     let eye = world.ray_from_world(&Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.2).normalize()));
-    let (c, _) = w.trace(
-        &world,
-        &eye,
-        0.0,
-        RayKind::Primary,
-        0,
-        1.0,
-        &mut Counters::default(),
-        &mut rec,
-    );
+    let (c, _) = crate::common::eye_ray(&w, &world, &eye, 0.0, &mut Counters::default(), &mut rec);
     let n = rec
         .rays
         .iter()
@@ -319,16 +308,7 @@ fn counters_count_each_kind_of_ray_in_the_tree() {
     let eye = world.ray_from_world(&Ray::new(Vec3::new(0.1, 5.0, 0.05), Vec3::NEG_Y));
     let mut rec = RayRecorder::default();
     let mut c = Counters::default();
-    w.trace(
-        &world,
-        &eye,
-        0.0,
-        RayKind::Primary,
-        0,
-        1.0,
-        &mut c,
-        &mut rec,
-    );
+    crate::common::eye_ray(&w, &world, &eye, 0.0, &mut c, &mut rec);
     let count = |k: RayKind| rec.rays.iter().filter(|r| r.kind == k).count() as u64;
     let tree = [
         count(RayKind::Primary),
@@ -372,16 +352,7 @@ fn glossy_children_spread_over_their_lobe_on_their_side() {
     let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 5.0, 0.0), dir));
     let mut rec = RayRecorder::default();
     let mut c = Counters::default();
-    w.trace(
-        &world,
-        &eye,
-        0.0,
-        RayKind::Primary,
-        0,
-        1.0,
-        &mut c,
-        &mut rec,
-    );
+    crate::common::eye_ray(&w, &world, &eye, 0.0, &mut c, &mut rec);
     let n = rec.rays[0].normal.expect("the eye ray hits the ball");
     let mirror = dir - 2.0 * dir.dot(n) * n;
     let children = |k: RayKind| -> Vec<Vec3> {
@@ -421,16 +392,7 @@ fn glossy_children_spread_over_their_lobe_on_their_side() {
     let world = World::build(&floor_scene(matte), BuildOptions::default());
     let mut rec = RayRecorder::default();
     let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 5.0, 0.0), dir));
-    w.trace(
-        &world,
-        &eye,
-        0.0,
-        RayKind::Primary,
-        0,
-        1.0,
-        &mut Counters::default(),
-        &mut rec,
-    );
+    crate::common::eye_ray(&w, &world, &eye, 0.0, &mut Counters::default(), &mut rec);
     assert_eq!(rec.rays.len(), 1, "{:?}", rec.rays);
 }
 
@@ -467,13 +429,11 @@ fn glossy_reflection_averages_its_lobe_and_spreads_only_at_the_first_hit() {
             ..Whitted::default()
         };
         let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 1.0, 0.0), down));
-        let (c, _) = w.trace(
+        let (c, _) = crate::common::eye_ray(
+            &w,
             &world,
             &eye,
             0.0,
-            RayKind::Primary,
-            0,
-            1.0,
             &mut Counters::default(),
             &mut NoObserver,
         );
@@ -492,16 +452,7 @@ fn glossy_reflection_averages_its_lobe_and_spreads_only_at_the_first_hit() {
     };
     let eye = world.ray_from_world(&Ray::new(Vec3::new(0.0, 0.5, 0.0), down));
     let mut rec = RayRecorder::default();
-    w.trace(
-        &world,
-        &eye,
-        0.0,
-        RayKind::Primary,
-        0,
-        1.0,
-        &mut Counters::default(),
-        &mut rec,
-    );
+    crate::common::eye_ray(&w, &world, &eye, 0.0, &mut Counters::default(), &mut rec);
     let at = |depth: u32| rec.rays.iter().filter(|r| r.depth == depth).count();
     assert_eq!([at(0), at(1), at(2), at(3), at(4)], [1, 4, 4, 4, 0]);
 }

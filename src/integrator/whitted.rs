@@ -16,8 +16,8 @@ use super::{RayKind, RayObserver};
 use crate::light::{is_delta, sample_light, Incident};
 use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
-use crate::math::{Ray, Spawn, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
-use crate::sampler::{SampleStream, Sampler};
+use crate::math::{Ray, Spawn, SurfacePoint, Vec3, SHADOW_EPSILON};
+use crate::sampler::SampleStream;
 use crate::scene::Light;
 use crate::stats::Counters;
 use crate::world::{Hit, World};
@@ -66,29 +66,11 @@ impl Default for Whitted {
 }
 
 impl Whitted {
-    /// Colour seen along `ray` (hits with `t > tmin`), and the hit itself.
-    /// Any sampled effect takes its values from the pixel-centre stream of a
-    /// one-sample uniform sampler (the centre of each light, lobe and
-    /// hemisphere stratum).
-    #[allow(clippy::too_many_arguments)]
-    pub fn trace(
-        &self,
-        world: &World,
-        ray: &Ray,
-        tmin: f32,
-        kind: RayKind,
-        depth: u32,
-        weight: f32,
-        c: &mut Counters,
-        obs: &mut impl RayObserver,
-    ) -> (Vec3, Option<Hit>) {
-        let sampler = Sampler::fixed(Vec2::splat(0.5));
-        let mut stream = sampler.stream((0, 0), 0);
-        stream.next_2d();
-        self.trace_sampled(world, ray, tmin, kind, depth, weight, &mut stream, c, obs)
-    }
-
-    /// [`Whitted::trace`] taking every random decision from `stream`.
+    /// Colour seen along `ray` (hits with `t > tmin`), a ray of role `kind`
+    /// at recursion `depth` with contribution `weight`, and the hit itself;
+    /// every random decision (light point, glossy lobe, hemisphere) takes
+    /// the next dimension of `stream`. [`Integrator::li`](super::Integrator::li)
+    /// is this for a camera ray.
     #[allow(clippy::too_many_arguments)]
     pub fn trace_sampled(
         &self,

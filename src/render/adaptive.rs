@@ -15,9 +15,10 @@
 //! Points on an edge between two tiles that both split it are traced by
 //! both; the statistics count every ray actually traced.
 
-use super::film::{merge, tiles, Rect, TileFilm};
-use super::{screen_point, CameraModel, Control, Filter, Frame, Rendered, Settings};
-use crate::integrator::{Integrator, NoObserver};
+use super::film::{merge, tiles, TileFilm};
+use super::pixel::{render_unit, PixelSink, PixelStrategy, PixelValue, Step};
+use super::{CameraModel, Control, Filter, Frame, PixelCost, Rendered, SampleRecord, Settings};
+use crate::integrator::Integrator;
 use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
 use crate::world::World;
@@ -45,44 +46,45 @@ impl Adaptive {
 /// Lattice coordinates of a point: `2^max_depth` steps per pixel, `y` up.
 type Point = (u32, u32);
 
-/// Colour and camera-ray hit of a traced point.
+/// Colour, camera-ray hit and cost of a traced pixel corner.
 #[derive(Clone, Copy)]
 struct Traced {
     color: Vec3,
     hit: Option<(f32, Vec3)>,
+    cost: PixelCost,
 }
 
-/// What traces lattice points: the camera, integrator and settings.
+/// What traces lattice points: the per-sample step and the settings.
 struct Tracer<'a, I> {
-    world: &'a World,
-    camera: &'a CameraModel,
-    integrator: &'a I,
+    step: Step<'a, I>,
     settings: &'a Settings,
     /// Lattice steps per pixel.
     steps: u32,
 }
 
 impl<I: Integrator> Tracer<'_, I> {
-    fn trace(&self, (x, y): Point, counters: &mut Counters) -> Traced {
-        let (w, h) = self.settings.size;
+    /// The point's colour and camera-ray hit, through the loops' one
+    /// per-sample step with a stream of the point's own.
+    fn trace(&self, (x, y): Point, counters: &mut Counters) -> (Vec3, Option<(f32, Vec3)>) {
         let s = self.steps;
         let o = Vec2::new((x % s) as f32 / s as f32, (y % s) as f32 / s as f32);
         let key = (x as u64) | (y as u64) << 32;
         let mut stream = self.settings.sampler.stream_for_key(key);
-        let ray = self
-            .camera
-            .sample_ray(screen_point(x / s, y / s, o, w, h), &mut stream);
-        let (color, hit) = self.integrator.li(
-            self.world,
-            &ray,
-            self.camera.tmin(),
-            &mut stream,
-            counters,
-            &mut NoObserver,
-        );
+        let (color, hit) = self.step.sample((x / s, y / s, o), &mut stream, counters);
+        (color, hit.map(|h| (h.t, h.normal)))
+    }
+
+    /// A pixel corner, with what tracing it cost.
+    fn corner(&self, p: Point, counters: &mut Counters) -> Traced {
+        let before = *counters;
+        let (color, hit) = self.trace(p, counters);
         Traced {
             color,
-            hit: hit.map(|h| (h.t, h.normal)),
+            hit,
+            cost: PixelCost {
+                tests: counters.intersection_tests - before.intersection_tests,
+                nodes: counters.nodes_visited - before.nodes_visited,
+            },
         }
     }
 }
@@ -99,9 +101,12 @@ pub(super) fn render<I: Integrator>(
     let (w, h) = settings.size;
     let depth = a.max_depth.min(Adaptive::MAX_DEPTH);
     let tracer = Tracer {
-        world,
-        camera,
-        integrator,
+        step: Step {
+            world,
+            camera,
+            integrator,
+            size: (w, h),
+        },
         settings,
         steps: 1 << depth,
     };
@@ -114,7 +119,7 @@ pub(super) fn render<I: Integrator>(
             }
             let mut c = Counters::default();
             let row = (0..=w)
-                .map(|i| tracer.trace((i << depth, j << depth), &mut c))
+                .map(|i| tracer.corner((i << depth, j << depth), &mut c))
                 .collect();
             Some((row, c))
         })
@@ -131,9 +136,18 @@ pub(super) fn render<I: Integrator>(
             if !corners_done || control.cancelled() {
                 return None;
             }
-            let out = subdivide_tile(&tracer, a, depth, rect, &corner_rows);
+            // The pixel's colour is set directly (weight 1): the film's filter is
+            // unused, a box of the pixel's own square by construction.
+            let mut film = TileFilm::new(rect, Filter::Box(0.5), (w, h));
+            let mut strategy = Subdivide {
+                tracer: &tracer,
+                threshold: a.threshold,
+                corners: &corner_rows,
+                cache: HashMap::new(),
+            };
+            let (c, _) = render_unit(&mut strategy, rect, &mut film, settings.pixel_cost);
             control.progress(rect.area() as u64);
-            Some(out)
+            Some((film, c))
         })
         .collect();
     let films: Vec<Option<TileFilm>> = films
@@ -154,56 +168,92 @@ pub(super) fn render<I: Integrator>(
     }
 }
 
-/// Pass 2 for one tile: every pixel's square, subdivided where needed.
-fn subdivide_tile<I: Integrator>(
-    tracer: &Tracer<'_, I>,
-    a: &Adaptive,
-    depth: u32,
-    rect: Rect,
-    corners: &[Option<(Vec<Traced>, Counters)>],
-) -> (TileFilm, Counters) {
-    let (w, h) = tracer.settings.size;
-    // The pixel's colour is set directly (weight 1): the film's filter is
-    // unused, a box of the pixel's own square by construction.
-    let mut film = TileFilm::new(rect, Filter::Box(0.5), (w, h));
-    let mut counters = Counters::default();
-    let mut cache: HashMap<Point, Vec3> = HashMap::new();
-    let corner = |i: u32, j: u32| -> Traced {
-        corners[j as usize].as_ref().expect("pass 1 complete").0[i as usize]
-    };
-    let s = 1u32 << depth;
-    for row in rect.row0..rect.row1 {
-        let j = h - 1 - row;
-        for i in rect.x0..rect.x1 {
-            let c = [
-                corner(i, j).color,
-                corner(i + 1, j).color,
-                corner(i, j + 1).color,
-                corner(i + 1, j + 1).color,
-            ];
-            let mut used = vec![
-                (i * s, j * s),
-                ((i + 1) * s, j * s),
-                (i * s, (j + 1) * s),
-                ((i + 1) * s, (j + 1) * s),
-            ];
-            let mut sq = Square {
-                tracer,
-                threshold: a.threshold,
-                cache: &mut cache,
-                counters: &mut counters,
-                used: &mut used,
-            };
-            let color = sq.value((i * s, j * s), s, c);
-            used.sort_unstable();
-            used.dedup();
-            film.set_pixel(i, row, color);
-            // Depth and normal: the pixel's lower-left corner ray.
-            film.record_hit(i, row, 0.0, corner(i, j).hit);
-            film.set_samples(i, row, used.len() as u32);
-        }
+/// Pass 2's strategy for the pixels of one tile: every pixel's square,
+/// subdivided where needed, new points traced once per tile.
+struct Subdivide<'a, 't, I> {
+    tracer: &'a Tracer<'t, I>,
+    threshold: f32,
+    corners: &'a [Option<(Vec<Traced>, Counters)>],
+    cache: HashMap<Point, Vec3>,
+}
+
+impl<I> Subdivide<'_, '_, I> {
+    /// The pixel corner `(i, j)` of pass 1.
+    fn corner(&self, i: u32, j: u32) -> Traced {
+        self.corners[j as usize]
+            .as_ref()
+            .expect("pass 1 complete")
+            .0[i as usize]
     }
-    (film, counters)
+}
+
+impl<I: Integrator> PixelStrategy for Subdivide<'_, '_, I> {
+    /// Also returns the cost of the corners the pixel owns: its lower-left
+    /// one, and the right or top one on the image's last column or row, so
+    /// every corner belongs to exactly one pixel and the pixels' costs add
+    /// up to the render's counters.
+    fn pixel<S: PixelSink>(
+        &mut self,
+        sink: &mut S,
+        x: u32,
+        row: u32,
+        counters: &mut Counters,
+        _: &mut Vec<SampleRecord>,
+    ) -> PixelCost {
+        let (w, h) = self.tracer.settings.size;
+        let (i, j) = (x, h - 1 - row);
+        let s = self.tracer.steps;
+        let c = [
+            self.corner(i, j).color,
+            self.corner(i + 1, j).color,
+            self.corner(i, j + 1).color,
+            self.corner(i + 1, j + 1).color,
+        ];
+        let mut used = vec![
+            (i * s, j * s),
+            ((i + 1) * s, j * s),
+            (i * s, (j + 1) * s),
+            ((i + 1) * s, (j + 1) * s),
+        ];
+        let mut sq = Square {
+            tracer: self.tracer,
+            threshold: self.threshold,
+            cache: &mut self.cache,
+            counters,
+            used: &mut used,
+        };
+        let color = sq.value((i * s, j * s), s, c);
+        used.sort_unstable();
+        used.dedup();
+        // Depth and normal: the pixel's lower-left corner ray.
+        let (depth, normal) = self.corner(i, j).hit.unwrap_or((f32::INFINITY, Vec3::ZERO));
+        sink.pixel(
+            x,
+            row,
+            PixelValue {
+                color: Some(color),
+                depth,
+                normal,
+                samples: used.len() as u32,
+            },
+        );
+        let mut owned = self.corner(i, j).cost;
+        let mut own = |ci: u32, cj: u32| {
+            let c = self.corner(ci, cj).cost;
+            owned.tests += c.tests;
+            owned.nodes += c.nodes;
+        };
+        if i + 1 == w {
+            own(w, j);
+        }
+        if j + 1 == h {
+            own(i, h);
+        }
+        if i + 1 == w && j + 1 == h {
+            own(w, h);
+        }
+        owned
+    }
 }
 
 /// The recursion over one pixel's square.
@@ -222,7 +272,7 @@ impl<I: Integrator> Square<'_, '_, I> {
         if let Some(&c) = self.cache.get(&p) {
             return c;
         }
-        let c = self.tracer.trace(p, self.counters).color;
+        let c = self.tracer.trace(p, self.counters).0;
         self.cache.insert(p, c);
         c
     }

@@ -81,9 +81,6 @@ pub struct TileFilm {
     pub depth: Vec<f32>,
     /// Normal of the kept hit, per tile pixel.
     pub normal: Vec<Vec3>,
-    /// Squared distance of the kept hit's sample from the pixel's reference
-    /// point (the nearest sample's hit is kept).
-    nearest: Vec<f32>,
     /// Camera rays traced per tile pixel.
     pub samples: Vec<u32>,
     /// What each tile pixel's rays cost.
@@ -106,10 +103,15 @@ impl TileFilm {
             weight: vec![0.0; area.area()],
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
-            nearest: vec![f32::INFINITY; n],
             samples: vec![0; n],
             cost: vec![Default::default(); n],
         }
+    }
+
+    /// How many pixels a sample's filter reaches beyond its own.
+    #[inline]
+    pub fn support(&self) -> u32 {
+        self.support as u32
     }
 
     /// Index of tile pixel `(x, row)` in the per-pixel planes.
@@ -158,34 +160,15 @@ impl TileFilm {
         }
     }
 
-    /// Records a camera ray of tile pixel `(x, row)`; its hit is kept for the
-    /// depth and normal planes if the sample (at squared distance `d2` from
-    /// the pixel's reference point) is the nearest so far.
+    /// Sets the reconstructed colour of tile pixel `(x, row)` directly,
+    /// with weight 1 (a filter inside the pixel, whose samples the loop
+    /// summed itself, or a strategy such as adaptive subdivision that
+    /// integrates the pixel itself).
     #[inline]
-    pub fn record_hit(&mut self, x: u32, row: u32, d2: f32, hit: Option<(f32, Vec3)>) {
-        let k = self.tile_index(x, row);
-        self.samples[k] += 1;
-        if d2 < self.nearest[k] {
-            self.nearest[k] = d2;
-            let (t, n) = hit.unwrap_or((f32::INFINITY, Vec3::ZERO));
-            self.depth[k] = t;
-            self.normal[k] = n;
-        }
-    }
-
-    /// Sets the reconstructed colour of tile pixel `(x, row)` directly (a
-    /// strategy such as adaptive subdivision that integrates the pixel
-    /// itself), with weight 1.
     pub fn set_pixel(&mut self, x: u32, row: u32, c: Vec3) {
         let k = self.area_index(x, row);
         self.sum[k] = c;
         self.weight[k] = 1.0;
-    }
-
-    /// Sets the camera-ray count of tile pixel `(x, row)`.
-    pub fn set_samples(&mut self, x: u32, row: u32, n: u32) {
-        let k = self.tile_index(x, row);
-        self.samples[k] = n;
     }
 
     #[inline]
@@ -469,32 +452,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    /// A pixel keeps the hit of its sample nearest the reference point, and
-    /// counts every camera ray.
-    #[test]
-    fn the_nearest_sample_s_hit_is_kept() {
-        let t = Rect {
-            x0: 0,
-            row0: 0,
-            x1: 2,
-            row1: 2,
-        };
-        let mut f = TileFilm::new(t, Filter::Box(0.5), (2, 2));
-        f.record_hit(1, 0, 0.5, Some((3.0, Vec3::X)));
-        f.record_hit(1, 0, 0.2, Some((4.0, Vec3::Y)));
-        f.record_hit(1, 0, 0.3, Some((5.0, Vec3::Z)));
-        f.record_hit(1, 0, 0.25, None);
-        let k = f.tile_index(1, 0);
-        assert_eq!((f.depth[k], f.normal[k], f.samples[k]), (4.0, Vec3::Y, 4));
-        f.record_hit(1, 0, 0.1, None);
-        assert_eq!(
-            (f.depth[k], f.normal[k], f.samples[k]),
-            (f32::INFINITY, Vec3::ZERO, 5)
-        );
-        let other = f.tile_index(0, 1);
-        assert_eq!((f.depth[other], f.samples[other]), (f32::INFINITY, 0));
     }
 
     #[test]

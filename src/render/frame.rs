@@ -34,8 +34,11 @@ pub struct Frame {
     pub samples: Vec<u32>,
     /// What tracing the pixel's samples cost the accelerators, if
     /// [`Settings::pixel_cost`](super::Settings::pixel_cost) asked for it
-    /// (zero otherwise, and under adaptive sampling, whose corners are
-    /// shared between pixels).
+    /// (zero otherwise). Under adaptive sampling, where neighbours share
+    /// rays, each shared ray counts in the pixel that traced it first (a
+    /// pixel corner in the pixel whose lower-left corner it is, or on the
+    /// image's right and top edges the pixel beside it), so the costs still
+    /// add up to the render's counters.
     pub cost: Vec<PixelCost>,
     /// Per row (top first): whether it was rendered (a cancelled render
     /// leaves rows out; a render of a region marks the region's rows when

@@ -1,15 +1,17 @@
-//! The render loop: tiles over rayon, each tile's pixels sampled by a
-//! [`Sampler`], traced by an [`Integrator`] and reconstructed by a [`Filter`]
-//! on a [`film`]; or, with [`Adaptive`] settings, Whitted's corner
-//! subdivision. The loop knows nothing of any effect: everything random is a
-//! dimension of the sample stream it hands the integrator.
+//! The render loop: bands of rows or tiles over rayon, each pixel sampled by
+//! a [`Sampler`] (or, with [`Adaptive`] settings, Whitted's corner
+//! subdivision), traced by an [`Integrator`] and reconstructed by a
+//! [`Filter`], in the frame itself or on a [`film`]. Every path is the one
+//! pixel loop of `pixel.rs` with its own sink. The loop knows nothing of any
+//! effect: everything random is a dimension of the sample stream it hands
+//! the integrator.
 
 mod adaptive;
 mod camera;
 pub mod film;
 mod filter;
 mod frame;
-pub mod legacy;
+mod pixel;
 pub mod views;
 
 use crate::sampler::{SampleStream, Sampler};
@@ -17,13 +19,15 @@ pub use adaptive::Adaptive;
 pub use camera::{pixel_of_screen, screen_point, CameraModel};
 pub use filter::Filter;
 pub use frame::{Frame, PixelCost};
+pub use pixel::BAND_ROWS;
 
-use crate::integrator::{Integrator, NoObserver, Whitted};
+use crate::integrator::Integrator;
 use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
 use crate::world::World;
 pub use film::Rect;
 use film::{merge, tiles, TileFilm};
+use pixel::{render_unit, Band, Step, Supersample};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -91,7 +95,7 @@ pub struct Settings {
     pub keep_samples: bool,
     /// Fill [`Frame::cost`], the per-pixel cost plane of `--cost-image`.
     /// Off unless asked for: writing it touches 16 bytes a pixel of fresh
-    /// memory, which costs a one-ray render about 2% (`glint bench-loop`).
+    /// memory, which costs a one-ray render about 2%.
     pub pixel_cost: bool,
 }
 
@@ -135,10 +139,10 @@ pub struct Rendered {
 
 /// Renders `world` seen through `camera` into a `width`×`height` frame with
 /// one ray through each pixel at `offset`. Returns the merged counters.
-pub fn render(
+pub fn render<I: Integrator>(
     world: &World,
     camera: &CameraModel,
-    integrator: &Whitted,
+    integrator: &I,
     size: (u32, u32),
     offset: PixelOffset,
 ) -> (Frame, Counters) {
@@ -194,7 +198,8 @@ pub fn render_region<I: Integrator>(
     render_tiles(world, camera, integrator, settings, control, Some(region))
 }
 
-/// The tile loop of [`render_image`] and [`render_region`].
+/// The tile loop of [`render_image`] and [`render_region`]: each tile's
+/// pixels into a film of the tile and its filter margin, the films merged.
 fn render_tiles<I: Integrator>(
     world: &World,
     camera: &CameraModel,
@@ -215,9 +220,21 @@ fn render_tiles<I: Integrator>(
             if region.is_some_and(|r| !rect.grown(support, w, h).overlaps(&r)) {
                 return None;
             }
-            let out = render_tile(world, camera, integrator, settings, rect);
+            let step = Step {
+                world,
+                camera,
+                integrator,
+                size: (w, h),
+            };
+            let mut film = TileFilm::new(rect, settings.filter, (w, h));
+            let (counters, kept) = render_unit(
+                &mut Supersample::new(step, settings),
+                rect,
+                &mut film,
+                settings.pixel_cost,
+            );
             control.progress(rect.area() as u64);
-            Some(out)
+            Some((film, counters, kept))
         })
         .collect();
     let mut counters = Counters::default();
@@ -247,16 +264,6 @@ fn render_tiles<I: Integrator>(
     }
 }
 
-/// Rows per work unit of the band loop (filters inside their pixel): small enough to balance the load
-/// over many threads, large enough that each unit has thousands of rays.
-pub const BAND_ROWS: usize = 4;
-/// Columns per block: a band is traced in blocks of `BLOCK × BAND_ROWS`
-/// pixels, not row by row, so neighbouring rays follow each other through
-/// the accelerator while its nodes are still in cache (measured with
-/// `glint bench-loop`: the faceted gem 4-6% faster than row order; the same
-/// pixels, the same arithmetic, so the same image).
-const BLOCK: usize = 8;
-
 /// The loop for filters confined to their own pixel (support 0: box 0.5, the
 /// course's default, and every one-sample render). No sample reaches another
 /// pixel, so there are no margins to merge: the work unit is a band of
@@ -273,21 +280,6 @@ fn render_bands<I: Integrator>(
     let (w, h) = settings.size;
     let mut frame = Frame::new(w, h);
     let wu = w as usize;
-    let sampler = &settings.sampler;
-    let filter = settings.filter;
-    // One ray per pixel at a fixed offset: its position and weight are the
-    // same for every pixel (the course's and `glint render`'s default).
-    let fixed = sampler
-        .fixed_offset()
-        .map(|o| (o, filter.weight(o.x - 0.5, o.y - 0.5)));
-    let one = sampler.spp() == 1;
-    // The one-ray render (the default): a pixel is its sample's colour, no
-    // sums, weights or distances. `0 + c` keeps the film's arithmetic (it
-    // turns a -0 into +0), so the image stays the tiled path's bit for bit.
-    let one_ray = match fixed {
-        Some((o, wt)) if one && wt == 1.0 && !settings.keep_samples => Some(o),
-        _ => None,
-    };
     let parts: Vec<(Counters, Vec<SampleRecord>)> = frame
         .color
         .par_chunks_mut(wu * BAND_ROWS)
@@ -299,119 +291,40 @@ fn render_bands<I: Integrator>(
         .enumerate()
         .map(
             |(band, (((((color, depth), normal), samples), cost), complete))| {
-                let mut counters = Counters::default();
-                let mut kept = Vec::new();
                 if control.cancelled() {
-                    return (counters, kept);
+                    return (Counters::default(), Vec::new());
                 }
-                let rows = complete.len();
-                for x0 in (0..w).step_by(BLOCK) {
-                    for r in 0..rows {
-                        // Row 0 of the frame is the top of the image; screen j grows upwards.
-                        let j = h - 1 - (band * BAND_ROWS + r) as u32;
-                        for i in x0..(x0 + BLOCK as u32).min(w) {
-                            let p = r * wu + i as usize;
-                            if let Some(o) = one_ray {
-                                let before = counters;
-                                let mut stream = sampler.stream((i, j), 0);
-                                stream.skip();
-                                let (c, hit) = camera_sample(
-                                    world,
-                                    camera,
-                                    integrator,
-                                    (i, j, o),
-                                    (w, h),
-                                    &mut stream,
-                                    &mut counters,
-                                );
-                                color[p] = Vec3::ZERO + c;
-                                depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
-                                normal[p] = hit.map_or(Vec3::ZERO, |h| h.normal);
-                                samples[p] = 1;
-                                if settings.pixel_cost {
-                                    cost[p] = PixelCost {
-                                        tests: counters.intersection_tests
-                                            - before.intersection_tests,
-                                        nodes: counters.nodes_visited - before.nodes_visited,
-                                    };
-                                }
-                                continue;
-                            }
-                            let (mut sum, mut wsum, mut nearest) =
-                                (Vec3::ZERO, 0.0f32, f32::INFINITY);
-                            let before = counters;
-                            for k in 0..sampler.spp() {
-                                let mut stream = sampler.stream((i, j), k);
-                                let (o, wt) = match fixed {
-                                    Some(f) => {
-                                        stream.skip();
-                                        f
-                                    }
-                                    None => {
-                                        let o = stream.next_2d();
-                                        (o, filter.weight(o.x - 0.5, o.y - 0.5))
-                                    }
-                                };
-                                let (c, hit) = camera_sample(
-                                    world,
-                                    camera,
-                                    integrator,
-                                    (i, j, o),
-                                    (w, h),
-                                    &mut stream,
-                                    &mut counters,
-                                );
-                                if wt == 1.0 {
-                                    // `c · 1` is `c`: the box filters' case.
-                                    sum += c;
-                                    wsum += 1.0;
-                                } else if wt != 0.0 {
-                                    sum += c * wt;
-                                    wsum += wt;
-                                }
-                                // A lone sample is the nearest: skip the distance.
-                                let d2 = if one {
-                                    0.0
-                                } else {
-                                    (o - settings.reference).length_squared()
-                                };
-                                if d2 < nearest {
-                                    nearest = d2;
-                                    depth[p] = hit.map_or(f32::INFINITY, |h| h.t);
-                                    normal[p] = hit.map_or(Vec3::ZERO, |h| h.normal);
-                                }
-                                if settings.keep_samples {
-                                    kept.push(SampleRecord {
-                                        pixel: (i, j),
-                                        offset: o,
-                                        color: c,
-                                    });
-                                }
-                            }
-                            // `sum / 1` is `sum`: skip the division of one-ray renders.
-                            color[p] = if wsum == 1.0 {
-                                sum
-                            } else if wsum > 0.0 {
-                                sum / wsum
-                            } else {
-                                Vec3::ZERO
-                            };
-                            samples[p] = sampler.spp();
-                            if settings.pixel_cost {
-                                cost[p] = PixelCost {
-                                    tests: counters.intersection_tests - before.intersection_tests,
-                                    nodes: counters.nodes_visited - before.nodes_visited,
-                                };
-                            }
-                        }
-                    }
-                }
+                let row0 = (band * BAND_ROWS) as u32;
+                let rect = Rect {
+                    x0: 0,
+                    row0,
+                    x1: w,
+                    row1: row0 + complete.len() as u32,
+                };
+                let mut sink = Band {
+                    row0,
+                    width: wu,
+                    color,
+                    depth,
+                    normal,
+                    samples,
+                    cost,
+                };
+                let step = Step {
+                    world,
+                    camera,
+                    integrator,
+                    size: (w, h),
+                };
+                let out = render_unit(
+                    &mut Supersample::new(step, settings),
+                    rect,
+                    &mut sink,
+                    settings.pixel_cost,
+                );
                 complete.iter_mut().for_each(|d| *d = true);
-                // Kept samples in pixel order (rows top down, then columns;
-                // a stable sort keeps each pixel's samples in index order).
-                kept.sort_by_key(|s| (std::cmp::Reverse(s.pixel.1), s.pixel.0));
                 control.progress((complete.len() * wu) as u64);
-                (counters, kept)
+                out
             },
         )
         .collect();
@@ -426,83 +339,6 @@ fn render_bands<I: Integrator>(
         counters,
         samples,
     }
-}
-
-/// Traces every sample of the pixels of `rect` into a fresh tile film.
-fn render_tile<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    settings: &Settings,
-    rect: Rect,
-) -> (TileFilm, Counters, Vec<SampleRecord>) {
-    let (w, h) = settings.size;
-    let mut film = TileFilm::new(rect, settings.filter, (w, h));
-    let mut counters = Counters::default();
-    let mut kept = Vec::new();
-    let sampler = &settings.sampler;
-    for row in rect.row0..rect.row1 {
-        // Row 0 of the frame is the top of the image; screen j grows upwards.
-        let j = h - 1 - row;
-        for i in rect.x0..rect.x1 {
-            let before = counters;
-            for k in 0..sampler.spp() {
-                let mut stream = sampler.stream((i, j), k);
-                let o = stream.next_2d();
-                let (c, hit) = camera_sample(
-                    world,
-                    camera,
-                    integrator,
-                    (i, j, o),
-                    (w, h),
-                    &mut stream,
-                    &mut counters,
-                );
-                film.splat(i, row, o, c);
-                let d2 = (o - settings.reference).length_squared();
-                film.record_hit(i, row, d2, hit.map(|h| (h.t, h.normal)));
-                if settings.keep_samples {
-                    kept.push(SampleRecord {
-                        pixel: (i, j),
-                        offset: o,
-                        color: c,
-                    });
-                }
-            }
-            if settings.pixel_cost {
-                let k = film.tile_index(i, row);
-                film.cost[k] = PixelCost {
-                    tests: counters.intersection_tests - before.intersection_tests,
-                    nodes: counters.nodes_visited - before.nodes_visited,
-                };
-            }
-        }
-    }
-    (film, counters, kept)
-}
-
-/// One camera sample: the ray through offset `o` of pixel `(i, j)` of a
-/// `w`×`h` image, at the stream's time and lens point, traced by the
-/// integrator (every loop's inner step).
-#[inline]
-fn camera_sample<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    (i, j, o): (u32, u32, Vec2),
-    (w, h): (u32, u32),
-    stream: &mut SampleStream,
-    counters: &mut Counters,
-) -> (Vec3, Option<crate::world::Hit>) {
-    let ray = camera.sample_ray(screen_point(i, j, o, w, h), stream);
-    integrator.li(
-        world,
-        &ray,
-        camera.tmin(),
-        stream,
-        counters,
-        &mut NoObserver,
-    )
 }
 
 /// Grey level of the depth image: `t0` (near) is white, `t1` is black,
@@ -522,6 +358,7 @@ pub fn normal_rgb(n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrator::Whitted;
     use crate::sampler::{GridLayout, Sampler, SamplerKind};
     use std::sync::atomic::AtomicU64;
 

@@ -1,5 +1,5 @@
-//! The ray tree of one pixel: every ray the Whitted integrator spawned for
-//! it, recorded by a [`RayRecorder`] during an ordinary trace, then written
+//! The ray tree of one pixel: every ray the integrator (the Whitted tree,
+//! or any other) spawned for it, recorded by a [`RayRecorder`] during an ordinary trace, then written
 //! as JSON (the tree), OBJ or PLY line segments (to load beside the scene in
 //! a 3-D viewer) or drawn over the rendered image in the camera's projection.
 //!
@@ -9,9 +9,10 @@
 //! drawn to `t = 100`. A shadow ray that something blocked is drawn dashed.
 
 use super::draw::Canvas;
-use crate::integrator::{RayKind, RayRecorder, RecordedRay, Whitted};
+use crate::integrator::{Integrator, RayKind, RayRecorder, RecordedRay};
 use crate::math::{Vec2, Vec3};
 use crate::render::{pixel_of_screen, screen_point, CameraModel, PixelOffset};
+use crate::sampler::Sampler;
 use crate::stats::Counters;
 use crate::world::World;
 use std::fmt::Write as _;
@@ -34,10 +35,10 @@ pub struct RayTree {
 
 /// Traces pixel `(x, y)` (y from the top) of a `w`×`h` image through
 /// `offset` of the pixel, recording every ray.
-pub fn record(
+pub fn record<I: Integrator>(
     world: &World,
     camera: &CameraModel,
-    integrator: &Whitted,
+    integrator: &I,
     (w, h): (u32, u32),
     (x, y): (u32, u32),
     offset: PixelOffset,
@@ -45,13 +46,16 @@ pub fn record(
     let j = h - 1 - y.min(h - 1);
     let ray = camera.ray(screen_point(x.min(w - 1), j, offset.0, w, h));
     let mut rec = RayRecorder::default();
-    let (color, _) = integrator.trace(
+    // Every random decision (light point, lobe, hemisphere) at the centre
+    // of its stratum, as in a one-ray render at the pixel centre.
+    let sampler = Sampler::fixed(Vec2::splat(0.5));
+    let mut stream = sampler.stream((0, 0), 0);
+    stream.skip();
+    let (color, _) = integrator.li(
         world,
         &ray,
         camera.tmin(),
-        RayKind::Primary,
-        0,
-        1.0,
+        &mut stream,
         &mut Counters::default(),
         &mut rec,
     );
@@ -262,10 +266,10 @@ fn clip_to_front(camera: &CameraModel, a: Vec3, b: Vec3) -> Option<(Vec3, Vec3)>
 
 /// The image `(w, h)` rendered as `glint render` renders it (one ray through
 /// each pixel's centre), dimmed, with `tree` drawn over it.
-pub fn overlay(
+pub fn overlay<I: Integrator>(
     world: &World,
     camera: &CameraModel,
-    integrator: &Whitted,
+    integrator: &I,
     (w, h): (u32, u32),
     tree: &RayTree,
 ) -> Canvas {

@@ -3,6 +3,11 @@
 
 #![allow(dead_code)]
 
+use glint::integrator::{Integrator, RayObserver};
+use glint::math::{Ray, Vec2, Vec3};
+use glint::sampler::Sampler;
+use glint::stats::Counters;
+use glint::world::{Hit, World};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -25,6 +30,23 @@ pub fn scenes(test: &str) -> Option<PathBuf> {
 /// The independent reference renders, or `None` (skipped) when absent.
 pub fn references(test: &str) -> Option<PathBuf> {
     testdata::references(test)
+}
+
+/// Colour and hit of the eye ray `ray` (hits with `t > tmin`) through the
+/// integrator's interface, every random decision at the centre of its
+/// stratum: the stream of a one-sample render at the pixel centre.
+pub fn eye_ray<I: Integrator>(
+    integrator: &I,
+    world: &World,
+    ray: &Ray,
+    tmin: f32,
+    counters: &mut Counters,
+    observer: &mut impl RayObserver,
+) -> (Vec3, Option<Hit>) {
+    let sampler = Sampler::fixed(Vec2::splat(0.5));
+    let mut stream = sampler.stream((0, 0), 0);
+    stream.skip();
+    integrator.li(world, ray, tmin, &mut stream, counters, observer)
 }
 
 /// glint's own example scenes (`scenes/` in the repository).

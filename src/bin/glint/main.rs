@@ -24,7 +24,6 @@ struct Cli {
 }
 
 mod bench;
-mod bench_loop;
 mod bench_rays;
 mod deep;
 mod merge;
@@ -63,17 +62,6 @@ enum Command {
         /// Only the cases whose name contains this text (or any of several, comma-separated).
         #[arg(long)]
         only: Option<String>,
-    },
-    /// Time the tile render loop against the old row loop at 1 sample per pixel.
-    BenchLoop {
-        /// Scene files (default: three course scenes from $GLINT_SHARED or ../shared; exits 2 without them).
-        scenes: Vec<PathBuf>,
-        /// Square image size.
-        #[arg(long, default_value_t = 400)]
-        size: u32,
-        /// Timed runs per loop (median reported).
-        #[arg(long, default_value_t = 9)]
-        runs: usize,
     },
     /// Render a scene to an image.
     #[command(long_about = RENDER_HELP)]
@@ -290,37 +278,6 @@ fn real_main() -> ExitCode {
         Command::Merge(a) => merge::run(a),
         Command::Raytree(a) => raytree::run(a),
         Command::Serve(a) => serve::run(a),
-        Command::BenchLoop { scenes, size, runs } => {
-            let scenes = if scenes.is_empty() {
-                let shared = std::env::var_os("GLINT_SHARED")
-                    .map_or_else(|| PathBuf::from("../shared"), PathBuf::from);
-                let dir = shared.join("scenes/6837");
-                if !dir.is_dir() {
-                    eprintln!(
-                        "glint bench-loop: the default scenes are the course's, in {} (needs the course data: set GLINT_SHARED); or name scene files, e.g. glint bench-loop scenes/whitted.txt",
-                        dir.display()
-                    );
-                    return ExitCode::from(2);
-                }
-                [
-                    "scene7_01_sphere_triangle.txt",
-                    "scene4_14_faceted_gem.txt",
-                    "scene6_07_bunny_mesh_40k.txt",
-                ]
-                .iter()
-                .map(|n| dir.join(n))
-                .collect()
-            } else {
-                scenes
-            };
-            match bench_loop::run(&bench_loop::LoopArgs { scenes, size, runs }) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("glint: {e}");
-                    ExitCode::from(2)
-                }
-            }
-        }
         Command::Traverse(a) => traverse::run(a),
         Command::Structure(a) => structure::run(a),
         Command::Bench {
