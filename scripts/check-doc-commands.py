@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Runs every command the documents show, on the current tree.
 
-    scripts/check-doc-commands.py [--list] [--no-build] [FILE...]
+    scripts/check-doc-commands.py [--list] [--no-build] [--manual] [FILE...]
 
 Where commands are found (the convention every document follows):
 - Markdown (README.md, ARCHITECTURE.md, docs/**/*.md, scenes/*.md,
@@ -11,6 +11,26 @@ Where commands are found (the convention every document follows):
   it runs only when GLINT_SHARED is set, and its text must say so. Commands
   of other systems (docker, kubectl, sbatch) go in `text` blocks: they are
   shown, not run here (tests/pieces.rs runs the deployment files).
+  `sh manual` marks a benchmark of minutes to hours, or a tool that needs
+  what CI does not install (its text says what): in CI its script must
+  exist and parse (`bash -n`, `python3 -m py_compile`); `--manual` runs it.
+- Markdown prose: every inline code span that starts with a command
+  (glint, raytracer, cargo, python3, bash, a script under scripts/, after
+  optional VAR=value words) is checked as what it is:
+  - a synopsis (placeholders: an ALL-CAPS word, `[`, `|`, `<`, `...`):
+    shown, not run;
+  - a name (`glint render`, `glint bench rays`): a glint subcommand's
+    `--help` must exit 0; a script's name alone (or `scripts/`) must exist;
+  - a flag mention (`glint render --integrator path`, `raytracer -stats`,
+    no input file): every flag must be in that command's help text, and a
+    `--help`/`-help` span is run;
+  - cargo's checks (`cargo test`, `fmt`, `clippy`, `doc`): CI runs them, so
+    the subcommand must be in .ci/run; `cargo install`, `cargo fuzz`,
+    `cargo mutants`, `pip install`, `apt-get`: installation steps or other
+    tools, shown, not run;
+  - anything else is a complete command: run as a block's line (a `serve`
+    or `-gui` command as a server). A complete command that needs the
+    course data or runs for minutes belongs in a fenced block with its mark.
 - Scene files (scenes/*.txt): the header line `# Render: COMMAND`.
 - `--help` texts: `glint --help`, every subcommand's `--help` and
   `raytracer -help` must print and exit 0; a help line `  $ COMMAND` is a
@@ -53,7 +73,8 @@ def markdown_files():
 
 
 def from_markdown(path):
-    """(command, needs_shared, where) for each line of the sh blocks."""
+    """(command, needs, where) for each line of the sh blocks; needs is
+    False, "shared" or "manual"."""
     cmds, block, shared, cont = [], None, False, ""
     for n, line in enumerate(open(path, encoding="utf-8"), 1):
         stripped = line.strip()
@@ -61,7 +82,9 @@ def from_markdown(path):
             m = re.match(r"^\s*```(\S*)\s*(.*)$", line)
             if m:
                 block = m.group(1)
-                shared = "needs-shared" in m.group(2).split()
+                marks = m.group(2).split()
+                shared = ("manual" if "manual" in marks else
+                          "shared" if "needs-shared" in marks else False)
             continue
         if stripped.startswith("```"):
             block = None
@@ -76,6 +99,110 @@ def from_markdown(path):
         cmds.append((cont + stripped, shared, f"{rel(path)}:{n}"))
         cont = ""
     return cmds
+
+
+PROGRAMS = ("glint", "raytracer", "cargo", "python3", "bash", "pip", "apt-get")
+ENV_WORD = re.compile(r"^[A-Z][A-Z0-9_]*=\S*$")
+PLACEHOLDER = re.compile(r"^[A-Z][A-Z0-9_]*$")
+
+
+def inline_spans(path):
+    """(span, where) for each inline code span of the prose (outside fenced
+    blocks) that starts with a command."""
+    out, fenced = [], False
+    for n, line in enumerate(open(path, encoding="utf-8"), 1):
+        if line.strip().startswith("```"):
+            fenced = not fenced
+            continue
+        if fenced:
+            continue
+        for m in re.finditer(r"`([^`]+)`", line):
+            span = m.group(1).strip()
+            words = span.split()
+            while words and ENV_WORD.match(words[0]):
+                words = words[1:]
+            if words and (words[0] in PROGRAMS or words[0].startswith(("scripts/", "./scripts/"))) \
+                    and (len(words) > 1 or words[0].startswith(("scripts/", "./scripts/"))):
+                out.append((span, f"{rel(path)}:{n}"))
+    return out
+
+
+def classify(span):
+    """What an inline command is (see the module documentation): synopsis,
+    name, mention, ci, setup or complete; with the program and its
+    subcommand words."""
+    words = span.split()
+    while words and ENV_WORD.match(words[0]):
+        words = words[1:]
+    prog, rest = words[0], words[1:]
+    if re.search(r"[\[\]<>|…σ]|\.\.\.", span) or any(PLACEHOLDER.match(w) for w in rest):
+        return "synopsis", prog, []
+    if prog == "cargo":
+        sub = rest[0] if rest else ""
+        if sub in ("test", "fmt", "clippy", "doc"):
+            return "ci", prog, [sub]
+        if sub in ("install", "fuzz", "mutants"):
+            return "setup", prog, [sub]
+        if len(rest) == 1:
+            return "name", prog, [sub]
+        return "complete", prog, []
+    if prog in ("pip", "apt-get"):
+        return "setup", prog, []
+    if prog in ("glint", "raytracer"):
+        subs = []
+        if prog == "glint":
+            while rest and re.fullmatch(r"[a-z][a-z-]*", rest[0]) and len(subs) < 2:
+                subs.append(rest.pop(0))
+        if any(w in ("-input", "-i") or "/" in w
+               or re.search(r"\.(txt|obj|ply|gltf|glb|png|exr|tga|ppm|pfm|json)$", w) for w in rest):
+            return "complete", prog, subs
+        return ("name" if not rest else "mention"), prog, subs
+    if prog.startswith(("scripts/", "./scripts/")) and not rest:
+        return "script", prog, []
+    return "complete", prog, []
+
+
+def help_text(bin_dir, prog, subs):
+    """The help text of `glint SUBS...` (its deepest subcommand that
+    exists) or of `raytracer`; None when the subcommand does not exist."""
+    if prog == "raytracer":
+        cmd = [os.path.join(bin_dir, "raytracer"), "-help"]
+    else:
+        cmd = [os.path.join(bin_dir, "glint")] + subs + ["--help"]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0 and prog == "glint" and len(subs) > 1:
+        # `glint bench rays` names the bench subcommand's rays mode.
+        return help_text(bin_dir, prog, subs[:1])
+    return p.stdout if p.returncode == 0 else None
+
+
+def check_inline(span, where, bin_dir):
+    """Checks an inline span that is not run as a command: None when it
+    holds, else why not."""
+    kind, prog, subs = classify(span)
+    if kind in ("synopsis", "setup"):
+        return None
+    if kind == "script":
+        exists = os.path.isdir if prog.endswith("/") else os.path.isfile
+        return None if exists(os.path.join(ROOT, prog)) else f"`{span}`: no such file or folder"
+    if kind == "ci":
+        ci = open(os.path.join(ROOT, ".ci", "run"), encoding="utf-8").read()
+        if not re.search(rf"^\s*(\w+=(\"[^\"]*\"|\S+)\s+)*cargo {subs[0]}\b", ci, re.M):
+            return f"`{span}`: .ci/run does not run cargo {subs[0]}"
+        return None
+    if prog == "cargo":
+        return None
+    text = help_text(bin_dir, prog, subs)
+    if text is None:
+        return f"`{span}`: {prog} {' '.join(subs)} is not a command (its --help fails)"
+    if kind == "mention":
+        words = span.split()
+        for w in words:
+            if w.startswith("-") and w not in ("-", "--"):
+                flag = w.split("=", 1)[0]
+                if not re.search(rf"(?<![\w-]){re.escape(flag)}(?![\w-])", text):
+                    return f"`{span}`: {flag} is not in `{prog} {' '.join(subs)}` help"
+    return None
 
 
 def from_scene_headers():
@@ -149,6 +276,23 @@ def reduce(cmd):
     return cmd
 
 
+def check_manual(cmd):
+    """A manual command's script exists and parses; None when it does."""
+    words = [w for w in cmd.split() if not ENV_WORD.match(w)]
+    script = next((w for w in words if w.startswith(("scripts/", "./scripts/"))), None)
+    if script is None:
+        return f"a manual command names no script under scripts/: {cmd}"
+    path = os.path.join(ROOT, script)
+    if not os.path.isfile(path):
+        return f"{script} does not exist"
+    check = (["python3", "-m", "py_compile", path] if script.endswith(".py")
+             else ["bash", "-n", path])
+    p = subprocess.run(check, capture_output=True, text=True)
+    if p.returncode != 0:
+        return f"{script} does not parse: {p.stderr.strip()[-200:]}"
+    return None
+
+
 def env_with(bin_dir):
     env = dict(os.environ)
     env["PATH"] = bin_dir + os.pathsep + env.get("PATH", "")
@@ -192,17 +336,29 @@ def main():
     if not shared and os.environ.get("GLINT_REQUIRE_SHARED") == "1":
         sys.exit("check-doc-commands: GLINT_REQUIRE_SHARED=1 but no course data (GLINT_SHARED)")
 
-    cmds = []
+    cmds, spans = [], []
     for md in markdown_files():
         cmds += from_markdown(md)
+        spans += inline_spans(md)
+    # Complete inline commands run as a block's lines do.
+    for span, where in spans:
+        kind, prog, subs = classify(span)
+        if kind == "complete":
+            server = (prog == "glint" and subs[:1] == ["serve"]) or "-gui" in span.split()
+            cmds.append((span + ("   # runs until stopped" if server else ""), False, where))
+    spans = [(sp, w) for sp, w in spans if classify(sp)[0] != "complete"]
     cmds += from_scene_headers()
     if not listing:
         cmds += from_help(bin_dir)
     if only:
         cmds = [c for c in cmds if any(c[2].startswith(o) for o in only)]
+        spans = [c for c in spans if any(c[1].startswith(o) for o in only)]
     if listing:
         for cmd, needs, where in cmds:
-            print(f"{where}: {'[needs GLINT_SHARED] ' if needs else ''}{cmd}")
+            mark = {"shared": "[needs GLINT_SHARED] ", "manual": "[manual] "}.get(needs, "")
+            print(f"{where}: {mark}{cmd}")
+        for span, where in spans:
+            print(f"{where}: [{classify(span)[0]}] {span}")
         return
 
     changed0, files0 = git_state()
@@ -210,9 +366,22 @@ def main():
                                             text=True).stdout.split())
     failures, ran, skipped = [], 0, []
     env = env_with(bin_dir)
+    checked = 0
+    for span, where in spans:
+        why = check_inline(span, where, bin_dir)
+        checked += 1
+        if why:
+            failures.append(f"{where}: {why}")
+    manual_run = "--manual" in args
     try:
         for cmd, needs, where in cmds:
-            if needs and not shared:
+            if needs == "manual" and not manual_run:
+                why = check_manual(cmd)
+                if why:
+                    failures.append(f"{where}: {why}")
+                skipped.append(f"{where}: manual (its script parses; --manual runs it): {cmd}")
+                continue
+            if needs == "shared" and not shared:
                 skipped.append(f"{where}: needs GLINT_SHARED: {cmd}")
                 continue
             if re.match(r"^cargo\s+test\b", cmd):
@@ -261,7 +430,8 @@ def main():
                 os.remove(path)
     for s in skipped:
         print(f"skipped {s}")
-    print(f"{ran} documented commands run, {len(skipped)} skipped, {len(failures)} failed")
+    print(f"{ran} documented commands run, {checked} inline names and flags checked, "
+          f"{len(skipped)} skipped, {len(failures)} failed")
     for f in failures:
         print(f"FAILED {f}", file=sys.stderr)
     if failures:

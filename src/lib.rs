@@ -22,5 +22,7 @@ pub mod shape;
 pub mod stats;
 #[cfg(test)]
 pub(crate) mod testdata;
+#[cfg(test)]
+pub(crate) mod testutil;
 pub mod viz;
 pub mod world;

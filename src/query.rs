@@ -205,13 +205,8 @@ mod tests {
     /// ray at a time and in packets.
     #[test]
     fn agrees_with_every_triangle_tested() {
-        let mut s = 12345u64;
-        let mut f = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut r = crate::testutil::Rng::new(12345);
+        let mut f = move || r.range(-1.0, 1.0);
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         for i in 0..3000u32 {

@@ -21,6 +21,7 @@
 //! Each test covers one accelerator (they run in parallel) over
 //! `SCENES × RAYS_PER_SCENE` = 120,000 rays.
 
+use crate::common::Rng;
 use glint::accel::{AccelKind, Aggregate, Grid, Split};
 use glint::math::{Keyframe, Mat4, Motion, Quat, Ray, Vec3};
 use glint::scene::{Background, Camera, Mesh, Node, Scene, ShapeDesc};
@@ -39,47 +40,6 @@ fn scene_count() -> u64 {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(SCENES)
-}
-
-/// splitmix64: tiny, deterministic, good enough for test inputs.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x1234_5678)
-    }
-    fn u(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn f(&mut self) -> f32 {
-        (self.u() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.u() % n as u64) as usize
-    }
-    fn chance(&mut self, p: f32) -> bool {
-        self.f() < p
-    }
-    fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
-    fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = self.v(-1.0, 1.0);
-            let l = v.length();
-            if l > 0.05 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
 }
 
 // ---------------------------------------------------------------------------

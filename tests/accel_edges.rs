@@ -12,6 +12,7 @@
 //! which stops at the first cell with any candidate hit draws a different
 //! picture.
 
+use crate::common::Rng;
 use glint::accel::grid::Lattice;
 use glint::accel::{AccelKind, Grid, Split};
 use glint::integrator::Whitted;
@@ -50,30 +51,6 @@ fn accelerators() -> Vec<AccelKind> {
     ]
 }
 
-/// splitmix64, so a failure names a reproducible ray.
-struct Rng(u64);
-
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn below(&mut self, n: u32) -> u32 {
-        ((self.f() * n as f32) as u32).min(n - 1)
-    }
-    fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = Vec3::new(self.f(), self.f(), self.f()) * 2.0 - 1.0;
-            if v.length() > 0.1 && v.length() <= 1.0 {
-                return v.normalize();
-            }
-        }
-    }
-}
-
 fn shape(shape: ShapeDesc) -> Node {
     Node::Shape {
         shape,
@@ -84,10 +61,10 @@ fn shape(shape: ShapeDesc) -> Node {
 /// Unit squares on integer planes, spheres on lattice corners, one long
 /// tilted triangle: deterministic, about 150 primitives in [0, 4]³.
 fn lattice_scene() -> Scene {
-    let mut r = Rng(7);
+    let mut r = Rng::new(7);
     let mut kids = Vec::new();
     for _ in 0..60 {
-        let axis = r.below(3) as usize;
+        let axis = r.below(3);
         let mut o = [r.below(4) as f32, r.below(4) as f32, r.below(4) as f32];
         o[axis] = r.below(5) as f32;
         let o = Vec3::from(o);
@@ -125,7 +102,7 @@ fn lattice_scene() -> Scene {
 /// The ray families, built on the lattice of a grid over the scene (its
 /// planes are the integer planes of the scene moved by the grid's padding).
 fn edge_rays(l: &Lattice) -> Vec<(&'static str, Ray, f32, f32)> {
-    let mut r = Rng(11);
+    let mut r = Rng::new(11);
     let mut rays = Vec::new();
     let (lo, hi) = (l.bounds.min, l.bounds.max);
     let inside = |r: &mut Rng| lo + Vec3::new(r.f(), r.f(), r.f()) * (hi - lo);
@@ -148,12 +125,12 @@ fn edge_rays(l: &Lattice) -> Vec<(&'static str, Ray, f32, f32)> {
         // On a cell face (index 0 and res are the grid's boundary), heading
         // anywhere: along the face's normal either way, within the face, at
         // random, or at a point inside the box.
-        let a = r.below(3) as usize;
-        let i = r.below(l.res[a] + 1);
+        let a = r.below(3);
+        let i = r.below(l.res[a] as usize + 1) as u32;
         let mut o = inside(&mut r);
         o[a] = l.plane(a, i as i32);
         let d = match r.below(4) {
-            0 => signed_axes[r.below(6) as usize],
+            0 => signed_axes[r.below(6)],
             1 => {
                 let mut d = r.unit();
                 d[a] = 0.0;
@@ -182,12 +159,12 @@ fn edge_rays(l: &Lattice) -> Vec<(&'static str, Ray, f32, f32)> {
 
         // Parallel to an axis, along a line where two cell planes meet (a
         // cell edge), or along a single plane, from outside or inside.
-        let a = r.below(3) as usize;
+        let a = r.below(3);
         let (b, c) = ((a + 1) % 3, (a + 2) % 3);
         let mut o = Vec3::ZERO;
-        o[b] = l.plane(b, r.below(l.res[b] + 1) as i32);
+        o[b] = l.plane(b, r.below(l.res[b] as usize + 1) as i32);
         o[c] = if r.below(2) == 0 {
-            l.plane(c, r.below(l.res[c] + 1) as i32)
+            l.plane(c, r.below(l.res[c] as usize + 1) as i32)
         } else {
             lo[c] + r.f() * (hi[c] - lo[c])
         };
@@ -207,7 +184,7 @@ fn edge_rays(l: &Lattice) -> Vec<(&'static str, Ray, f32, f32)> {
         rays.push(("parallel to an axis", Ray::new(o, d), 0.0, f32::INFINITY));
 
         // Through a lattice corner, from outside the box, and starting at one.
-        let k = [0, 1, 2].map(|a| r.below(l.res[a] + 1));
+        let k = [0, 1, 2].map(|a| r.below(l.res[a] as usize + 1) as u32);
         let p = corner(k);
         let from = (lo + hi) * 0.5 + r.unit() * (hi - lo).length();
         rays.push((

@@ -21,6 +21,7 @@
 //!
 //! Deterministic (a seeded generator); a failure prints the case and seed.
 
+use crate::common::Rng;
 use glam::{DMat4, DVec3};
 use glint::math::{Keyframe, Motion, Ray, Vec3};
 use glint::scene::{Background, Camera, Mesh, Node, Scene, ShapeDesc};
@@ -28,66 +29,31 @@ use glint::stats::Counters;
 use glint::world::{BuildOptions, Hit, World};
 use std::sync::Arc;
 
-/// splitmix64.
-struct Rng(u64);
-
-impl Rng {
-    fn u(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+/// A direction in the hemisphere around `n`, sometimes nearly tangent.
+fn hemisphere(r: &mut Rng, n: DVec3) -> DVec3 {
+    let mut w = r.unit64();
+    if w.dot(n) < 0.0 {
+        w = -w;
     }
-    /// Uniform in [0, 1).
-    fn f(&mut self) -> f64 {
-        (self.u() >> 11) as f64 / (1u64 << 53) as f64
+    if r.f64() < 0.15 {
+        // Grazing: tilt towards the tangent plane, down to 1e-7 of a radian.
+        let tangent = (w - n * w.dot(n)).normalize_or_zero();
+        let lift = r.log_range64(1e-7, 1e-2);
+        w = (tangent + n * lift).normalize_or(n);
     }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.f()
-    }
-    fn log_range(&mut self, lo: f64, hi: f64) -> f64 {
-        (lo.ln() + (hi.ln() - lo.ln()) * self.f()).exp()
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let l = v.length();
-            if l > 0.05 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
-    /// A direction in the hemisphere around `n`, sometimes nearly tangent.
-    fn hemisphere(&mut self, n: DVec3) -> DVec3 {
-        let mut w = self.unit();
-        if w.dot(n) < 0.0 {
-            w = -w;
-        }
-        if self.f() < 0.15 {
-            // Grazing: tilt towards the tangent plane, down to 1e-7 of a radian.
-            let tangent = (w - n * w.dot(n)).normalize_or_zero();
-            let lift = self.log_range(1e-7, 1e-2);
-            w = (tangent + n * lift).normalize_or(n);
-        }
-        w
-    }
+    w
 }
 
 /// Where a shape is, and how large: a random position up to 10⁵ from the
 /// origin (sometimes at it) and a size in 10⁻³..10³ not below 10⁻⁵ of it.
 fn placement(r: &mut Rng) -> (DVec3, f64) {
-    let pos = if r.f() < 0.1 {
+    let pos = if r.f64() < 0.1 {
         DVec3::ZERO
     } else {
-        r.unit() * r.log_range(1e-2, 1e5)
+        r.unit64() * r.log_range64(1e-2, 1e5)
     };
     loop {
-        let size = r.log_range(1e-3, 1e3);
+        let size = r.log_range64(1e-3, 1e3);
         if size >= 1e-5 * pos.length() {
             return (pos, size);
         }
@@ -95,7 +61,7 @@ fn placement(r: &mut Rng) -> (DVec3, f64) {
 }
 
 fn rotation(r: &mut Rng) -> DMat4 {
-    DMat4::from_axis_angle(r.unit(), r.range(0.0, std::f64::consts::TAU))
+    DMat4::from_axis_angle(r.unit64(), r.range64(0.0, std::f64::consts::TAU))
 }
 
 /// The kinds of shape tried.
@@ -192,9 +158,9 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
         }
         Kind::Ellipsoid | Kind::Cube => {
             let scale = DVec3::new(
-                size * r.range(0.3, 3.0),
-                size * r.range(0.3, 3.0),
-                size * r.range(0.3, 3.0),
+                size * r.range64(0.3, 3.0),
+                size * r.range64(0.3, 3.0),
+                size * r.range64(0.3, 3.0),
             );
             let m = DMat4::from_translation(pos) * rotation(r) * DMat4::from_scale(scale);
             let shape = if kind == Kind::Ellipsoid {
@@ -218,16 +184,16 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             // the rays live at one instant between them.
             let key = |r: &mut Rng, time: f32| Keyframe {
                 time,
-                translation: f32v(pos + r.unit() * size * r.range(0.0, 3.0)),
-                rotation: glam::DQuat::from_axis_angle(r.unit(), r.range(0.0, 6.0)).as_quat(),
+                translation: f32v(pos + r.unit64() * size * r.range64(0.0, 3.0)),
+                rotation: glam::DQuat::from_axis_angle(r.unit64(), r.range64(0.0, 6.0)).as_quat(),
                 scale: f32v(DVec3::new(
-                    size * r.range(0.3, 3.0),
-                    size * r.range(0.3, 3.0),
-                    size * r.range(0.3, 3.0),
+                    size * r.range64(0.3, 3.0),
+                    size * r.range64(0.3, 3.0),
+                    size * r.range64(0.3, 3.0),
                 )),
             };
             let motion = Motion::new(vec![key(r, 0.0), key(r, 1.0)]).expect("increasing times");
-            let time = r.f() as f32;
+            let time = r.f64() as f32;
             // The pose glint interpolates (in f32), as an exact matrix.
             let (t, q, s) = motion.pose(time);
             let m =
@@ -252,7 +218,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             let corner = |r: &mut Rng| {
                 f32v(
                     pos + rot.transform_vector3(
-                        DVec3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), 0.0) * size,
+                        DVec3::new(r.range64(-1.0, 1.0), r.range64(-1.0, 1.0), 0.0) * size,
                     ),
                 )
             };
@@ -272,7 +238,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             }
         }
         Kind::Plane => {
-            let n = f32v(r.unit());
+            let n = f32v(r.unit64());
             let q = f32v(pos);
             let offset = n.dot(q);
             // The plane as glint stores it: unit normal, offset along it.
@@ -313,14 +279,18 @@ fn scene(root: Node) -> Scene {
 fn surface_point(r: &mut Rng, c: &Case) -> (DVec3, DVec3) {
     match c.kind {
         Kind::Sphere | Kind::Ellipsoid | Kind::MovingEllipsoid => {
-            let u = r.unit();
+            let u = r.unit64();
             let n = c.m.inverse().transpose().transform_vector3(u).normalize();
             (c.m.transform_point3(u), n)
         }
         Kind::Cube => {
-            let axis = (r.u() % 3) as usize;
-            let sign = if r.f() < 0.5 { -1.0 } else { 1.0 };
-            let mut p = DVec3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0));
+            let axis = (r.u64() % 3) as usize;
+            let sign = if r.f64() < 0.5 { -1.0 } else { 1.0 };
+            let mut p = DVec3::new(
+                r.range64(-1.0, 1.0),
+                r.range64(-1.0, 1.0),
+                r.range64(-1.0, 1.0),
+            );
             p[axis] = sign;
             let mut n = DVec3::ZERO;
             n[axis] = sign;
@@ -328,7 +298,7 @@ fn surface_point(r: &mut Rng, c: &Case) -> (DVec3, DVec3) {
             (c.m.transform_point3(p), n)
         }
         Kind::Triangle => {
-            let (a, b) = (r.f(), r.f());
+            let (a, b) = (r.f64(), r.f64());
             let (a, b) = if a + b > 1.0 {
                 (1.0 - a, 1.0 - b)
             } else {
@@ -340,7 +310,7 @@ fn surface_point(r: &mut Rng, c: &Case) -> (DVec3, DVec3) {
         }
         Kind::Plane => {
             let (q, n, size) = (c.pts[0], c.pts[1], c.pts[2].x);
-            let t = (r.unit() - n * r.unit().dot(n)) * size;
+            let t = (r.unit64() - n * r.unit64().dot(n)) * size;
             (q + t - n * t.dot(n), n)
         }
     }
@@ -401,17 +371,17 @@ fn check_case(r: &mut Rng, c: &Case, world: &World, shots: usize, t: &mut Tally)
     for _ in 0..shots {
         let (p, n) = surface_point(r, c);
         // From outside, or (closed shapes, sometimes) from inside.
-        let inside = closed(c.kind) && r.f() < 0.3;
-        let side = if !closed(c.kind) && r.f() < 0.5 {
+        let inside = closed(c.kind) && r.f64() < 0.3;
+        let side = if !closed(c.kind) && r.f64() < 0.5 {
             -n
         } else {
             n
         };
         let origin = if inside {
-            c.m.transform_point3(r.unit() * r.range(0.0, 0.5))
+            c.m.transform_point3(r.unit64() * r.range64(0.0, 0.5))
         } else {
-            p + r.hemisphere(side)
-                * r.log_range(0.05, 50.0)
+            p + hemisphere(r, side)
+                * r.log_range64(0.05, 50.0)
                 * c.m.transform_vector3(DVec3::ONE).length().max(1e-3)
         };
         let origin = if c.kind == Kind::Plane || c.kind == Kind::Triangle {
@@ -420,7 +390,7 @@ fn check_case(r: &mut Rng, c: &Case, world: &World, shots: usize, t: &mut Tally)
             } else {
                 (c.pts[1] - c.pts[0]).length()
             };
-            p + r.hemisphere(side) * r.log_range(0.05, 50.0) * size
+            p + hemisphere(r, side) * r.log_range64(0.05, 50.0) * size
         } else {
             origin
         };
@@ -430,12 +400,12 @@ fn check_case(r: &mut Rng, c: &Case, world: &World, shots: usize, t: &mut Tally)
         };
         t.hits += 1;
         for _ in 0..8 {
-            let mut d = r.unit();
-            if r.f() < 0.3 {
+            let mut d = r.unit64();
+            if r.f64() < 0.3 {
                 // Nearly tangent to the surface, on either side.
                 let nn = h.normal.as_dvec3();
                 let tangent = (d - nn * d.dot(nn)).normalize_or_zero();
-                let lift = r.log_range(1e-7, 1e-2) * if r.f() < 0.5 { -1.0 } else { 1.0 };
+                let lift = r.log_range64(1e-7, 1e-2) * if r.f64() < 0.5 { -1.0 } else { 1.0 };
                 d = (tangent + nn * lift).normalize_or(nn);
             }
             let dir = f32v(d);
@@ -526,7 +496,7 @@ fn check_case(r: &mut Rng, c: &Case, world: &World, shots: usize, t: &mut Tally)
 }
 
 fn run(kind: Kind, flatten: bool, seed: u64) {
-    let mut r = Rng(seed);
+    let mut r = Rng::new(seed);
     let mut fails = Vec::new();
     let mut t = Tally {
         hits: 0,
@@ -618,7 +588,7 @@ fn closed_meshes_kept_transformed() {
 /// The check can fail: spawning from the bare hit point (no offset) re-hits.
 #[test]
 fn the_property_fails_without_the_offset() {
-    let mut r = Rng(7);
+    let mut r = Rng::new(7);
     let mut self_hits = 0;
     for _ in 0..200 {
         let c = random_case(&mut r, Kind::Sphere);
@@ -631,7 +601,7 @@ fn the_property_fails_without_the_offset() {
             continue;
         };
         for _ in 0..8 {
-            let d = f32v(r.hemisphere(h.normal.as_dvec3()));
+            let d = f32v(hemisphere(&mut r, h.normal.as_dvec3()));
             let bare = Ray::new(h.point, d);
             self_hits += world
                 .intersect(&bare, 0.0, f32::INFINITY, &mut cn)

@@ -246,6 +246,147 @@ fn every_endpoint_answers() {
     assert!(g["occupied"].as_u64().unwrap() > 0);
 }
 
+/// Mean absolute difference of two images of the same size, 0-255 scale.
+fn mean_abs(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: u64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| u64::from(x.abs_diff(*y)))
+        .sum();
+    sum as f64 / a.as_raw().len() as f64
+}
+
+/// The session's image after every pass up to the target.
+fn refined(s: &Server, q: &str) -> image::RgbImage {
+    let mut pass = 0;
+    loop {
+        let r = s.get(&format!("/api/render?{q}&pass={pass}"));
+        let img = r.png();
+        if r.header("x-glint-done") == Some("true") {
+            return img;
+        }
+        pass = r.header("x-glint-pass").unwrap().parse().unwrap();
+    }
+}
+
+/// The page's path tracer is `glint render --integrator path`'s: on the
+/// Cornell box (lit only by its emitting triangles) its refined image is as
+/// close to the command line's at the same samples per pixel as two
+/// independent renders are, and far from the Whitted image of the same view.
+/// Without `bounces`, the path tracer's own default (64) applies, as on the
+/// command line.
+#[test]
+fn path_integrator_renders_as_glint_render() {
+    let scene = common::own_scene("cornell_box.txt");
+    let dir = scratch("path");
+    let cli = |spp: &str, seed: &str, name: &str| {
+        let out = dir.join(name);
+        let o = Command::new(env!("CARGO_BIN_EXE_glint"))
+            .args(["render", scene.to_str().unwrap(), "-o"])
+            .arg(&out)
+            .args(["--size", "48", "48", "--integrator", "path", "--spp", spp])
+            .args(["--seed", seed, "-q"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        image::open(&out).unwrap().to_rgb8()
+    };
+    let reference = cli("64", "1", "ref.png");
+    let other = cli("64", "2", "other.png");
+    let s = Server::glint(&scene, &[]);
+    let path = refined(&s, "w=48&h=48&spp=64&integrator=path&session=p");
+    let whitted = refined(&s, "w=48&h=48&spp=64&shadows=1&session=w");
+    let (d_path, d_noise, d_whitted) = (
+        mean_abs(&path, &reference),
+        mean_abs(&other, &reference),
+        mean_abs(&whitted, &reference),
+    );
+    eprintln!("path tracer vs glint render: page {d_path:.2}, another seed {d_noise:.2}, Whitted {d_whitted:.2}");
+    // The passes are stratified each on their own (docs/serve.md): a little
+    // noisier than one 64-spp render, never more than twice.
+    assert!(d_path < 2.0 * d_noise + 0.5, "{d_path} vs {d_noise}");
+    assert!(d_whitted > 4.0 * d_path, "{d_whitted} vs {d_path}");
+    // Bounces: 1 is direct light only, darker than the default's 64.
+    let direct = refined(&s, "w=48&h=48&spp=64&integrator=path&bounces=1&session=d");
+    let sum = |i: &image::RgbImage| i.as_raw().iter().map(|&v| u64::from(v)).sum::<u64>();
+    assert!(
+        sum(&direct) * 10 < sum(&path) * 9,
+        "{} vs {}",
+        sum(&direct),
+        sum(&path)
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// The page's accelerators are the command line's, with its default: the
+/// menu holds every accelerator once, under a name `--accel` takes, with
+/// `bvh8` first and no alias (`bvh4`); `glint serve` and `glint render`
+/// show the same `--accel` default.
+#[test]
+fn accelerators_and_default_agree_with_glint_render() {
+    let s = Server::glint(&common::own_scene("whitted.txt"), &[]);
+    let d = s.json("/api/status")["defaults"].clone();
+    assert_eq!(d["accel"], "bvh8");
+    let menu: Vec<&str> = d["accels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(menu[0], "bvh8", "{menu:?}");
+    assert!(!menu.contains(&"bvh4"), "{menu:?}");
+    let kinds: Vec<glint::accel::AccelKind> = menu.iter().map(|n| n.parse().unwrap()).collect();
+    for (i, k) in kinds.iter().enumerate() {
+        assert!(!kinds[..i].contains(k), "{} twice in {menu:?}", menu[i]);
+    }
+    for name in glint::accel::AccelKind::NAMES {
+        let k: glint::accel::AccelKind = name.parse().unwrap();
+        assert!(kinds.contains(&k), "{name} missing from {menu:?}");
+    }
+    assert_eq!(
+        d["integrators"],
+        serde_json::json!(["whitted", "ao", "path"])
+    );
+    let default_of = |cmd: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_glint"))
+            .args([cmd, "--help"])
+            .output()
+            .unwrap();
+        let help = String::from_utf8_lossy(&o.stdout).into_owned();
+        let at = help
+            .find("--accel")
+            .unwrap_or_else(|| panic!("{cmd}: {help}"));
+        let rest = &help[at..];
+        let d = rest.find("[default: ").unwrap();
+        rest[d..d + rest[d..].find(']').unwrap() + 1].to_owned()
+    };
+    assert_eq!(default_of("serve"), default_of("render"));
+    assert_eq!(default_of("serve"), "[default: bvh8]");
+}
+
+/// Without `--port`, a taken 8837 is no error: the server listens on
+/// another free port and prints it. With `--port 8837` it is (exit 2).
+#[test]
+fn a_taken_default_port_falls_back() {
+    // Taken by this test, or already by someone else: taken either way.
+    let _held = std::net::TcpListener::bind("127.0.0.1:8837");
+    let scene = common::own_scene("whitted.txt");
+    let s = Server::start(
+        env!("CARGO_BIN_EXE_glint"),
+        &["serve", scene.to_str().unwrap()],
+    );
+    assert_ne!(s.addr, "127.0.0.1:8837");
+    assert_eq!(s.json("/api/status")["loaded"], true);
+    let o = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["serve", scene.to_str().unwrap(), "--port", "8837"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("8837"));
+}
+
 /// Bad parameters get a 400 naming what is wrong; nothing renders.
 #[test]
 fn bad_parameters_are_refused_with_a_message() {

@@ -12,16 +12,6 @@ use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 
 /// A tiny deterministic generator (xorshift), so failures reproduce.
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 fn world() -> World {
     let scene = glint::format::load_scene(&own_scene("mesh_knot_1k.txt")).unwrap();
     World::build(&scene, BuildOptions::default())
@@ -93,7 +83,7 @@ fn reference_walk(l: &Lattice, ray: &Ray) -> Vec<([u32; 3], Option<Face>)> {
 }
 
 fn random_ray(r: &mut Rng, centre: Vec3, size: f32) -> Ray {
-    let v = |r: &mut Rng| Vec3::new(r.f() as f32, r.f() as f32, r.f() as f32) * 2.0 - 1.0;
+    let v = |r: &mut Rng| Vec3::new(r.f(), r.f(), r.f()) * 2.0 - 1.0;
     let o = centre + v(r) * size * 1.5;
     let target = centre + v(r) * size * 0.5;
     Ray::new(o, (target - o).normalize())
@@ -104,7 +94,7 @@ fn grid_cells_equal_an_independent_parametric_walk() {
     let world = world();
     let b = world.bounds();
     let (centre, size) = (b.center(), b.extent().max_element());
-    let mut r = Rng(0x2545f4914f6cdd1d);
+    let mut r = Rng::new(0x2545f4914f6cdd1d);
     let mut compared = 0;
     for res in [[7, 5, 3], [13, 13, 13], [20, 9, 4]] {
         let grid = Grid::new(world.prims(), bounded(&world), Some(res));
@@ -148,7 +138,7 @@ fn bvh_enters_exactly_the_boxes_it_must() {
     let world = world();
     let b = world.bounds();
     let (centre, size) = (b.center(), b.extent().max_element());
-    let mut r = Rng(0x9e3779b97f4a7c15);
+    let mut r = Rng::new(0x9e3779b97f4a7c15);
     let mut entered_total = 0;
     for split in [Split::Sah, Split::Median, Split::Midpoint] {
         let bvh = Bvh::new(world.prims(), bounded(&world), split);
@@ -299,7 +289,7 @@ fn new_accelerators_are_recorded() {
         AccelKind::BvhHierarchy,
     ] {
         let s = Structure::build(&world, kind).expect("a recorded structure");
-        let mut r = Rng(0x2545f4914f6cdd1d);
+        let mut r = Rng::new(0x2545f4914f6cdd1d);
         let (mut inner, mut hits) = (0, 0);
         for _ in 0..300 {
             let ray = random_ray(&mut r, centre, size);

@@ -4,6 +4,7 @@
 //! raytree` command.
 
 use crate::common;
+use crate::common::Rng;
 use glint::format::load_scene;
 use glint::integrator::{NoObserver, RayKind, RayRecorder, Whitted};
 use glint::math::{Ray, Vec2, Vec3};
@@ -13,31 +14,13 @@ use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
 
 /// A tiny deterministic generator (xorshift), so failures reproduce.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn dir(&mut self) -> Vec3 {
-        loop {
-            let v = Vec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;
-            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
-                return v.normalize();
-            }
-        }
-    }
-}
-
 /// From random eye-ray hits on glint's own scenes and the course's (meshes,
 /// spheres, planes, under transforms), rays leaving the surface on either side
 /// never re-hit the same primitive immediately (which is what shadow/reflection
 /// acne is). The course's scenes are added when the data folder is present.
 #[test]
 fn secondary_rays_never_rehit_their_own_surface() {
-    let mut rng = Rng(0x9e3779b97f4a7c15);
+    let mut rng = Rng::new(0x9e3779b97f4a7c15);
     let mut checked = 0;
     let mut paths = vec![
         common::own_scene("whitted.txt"),
@@ -64,12 +47,12 @@ fn secondary_rays_never_rehit_their_own_surface() {
         let cam = CameraModel::new(world.camera());
         let mut c = Counters::default();
         for _ in 0..400 {
-            let s = Vec2::new(rng.next(), rng.next());
+            let s = Vec2::new(rng.f(), rng.f());
             let Some(h) = world.intersect(&cam.ray(s), cam.tmin(), f32::INFINITY, &mut c) else {
                 continue;
             };
             for _ in 0..8 {
-                let d = rng.dir();
+                let d = rng.unit();
                 let r = h.spawn_ray(d);
                 if let Some(h2) = world.intersect(&r, 0.0, f32::INFINITY, &mut c) {
                     let flat = !matches!(

@@ -1,5 +1,6 @@
-//! Helpers for the accelerators' unit tests: random primitive soups and a
-//! comparison with brute force.
+//! Helpers for the accelerators' unit tests: random primitive soups (from
+//! the tests' one generator, [`crate::testutil::Rng`]) and a comparison
+//! with brute force.
 
 use super::{Aggregate, Brute};
 use crate::math::{Ray, Vec3};
@@ -7,33 +8,7 @@ use crate::primitive::Primitive;
 use crate::shape::{Shape, Sphere, Triangle};
 use crate::stats::Counters;
 
-/// A small deterministic generator (xorshift64*).
-pub(crate) struct Rng(u64);
-
-impl Rng {
-    pub(crate) fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1)
-    }
-
-    /// Uniform in [0, 1).
-    pub(crate) fn f(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
-        (x >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    /// 0, 1 or 2.
-    pub(crate) fn below3(&mut self) -> usize {
-        ((self.f() * 3.0) as usize).min(2)
-    }
-
-    /// Uniform in the box [lo, hi).
-    pub(crate) fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(self.f(), self.f(), self.f()) * (hi - lo) + Vec3::splat(lo)
-    }
-}
+pub(crate) use crate::testutil::Rng;
 
 pub(crate) fn prim(shape: Shape) -> Primitive {
     Primitive {

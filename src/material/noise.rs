@@ -198,17 +198,16 @@ mod tests {
         }
     }
 
-    /// A small deterministic generator for sample points (no dependency).
+    /// Deterministic sample points in `[-span, span]³`.
     fn points(n: usize, seed: u64, span: f64) -> impl Iterator<Item = DVec3> {
-        let mut s = seed;
-        let mut next = move || {
-            // xorshift64*
-            s ^= s >> 12;
-            s ^= s << 25;
-            s ^= s >> 27;
-            (s.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-        };
-        (0..n).map(move |_| DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * (2.0 * span))
+        let mut r = crate::testutil::Rng::new(seed);
+        (0..n).map(move |_| {
+            DVec3::new(
+                r.range64(-span, span),
+                r.range64(-span, span),
+                r.range64(-span, span),
+            )
+        })
     }
 
     #[test]

@@ -105,14 +105,8 @@ mod tests {
 
     /// Deterministic sample points in `[-span, span]³`.
     fn points(n: usize, span: f32) -> impl Iterator<Item = Vec3> {
-        let mut s: u32 = 0x1234_5678;
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        };
-        (0..n).map(move |_| Vec3::new(next(), next(), next()) * span)
+        let mut r = crate::testutil::Rng::new(0x1234_5678);
+        (0..n).map(move |_| r.v(-1.0, 1.0) * span)
     }
 
     #[test]

@@ -94,13 +94,9 @@ mod tests {
     /// (both sides, repeated sides, zero, NaN and mixed directions).
     #[test]
     fn same_rays_as_the_surface_point() {
-        let mut seed = 0x1234_5679_u32;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            (seed % 2001) as f32 / 100.0 - 10.0
-        };
+        let mut r = crate::testutil::Rng::new(0x1234_5679);
+        // Hundredths in [-10, 10]: zero components come up.
+        let mut rnd = || r.below(2001) as f32 / 100.0 - 10.0;
         let bits = |r: Ray| [r.origin, r.dir].map(|v| v.to_array().map(f32::to_bits));
         for _ in 0..2000 {
             let n = Vec3::new(rnd(), rnd(), rnd()).normalize_or_zero();

@@ -271,13 +271,8 @@ mod tests {
     /// random, collinear, repeated, tiny, huge and non-finite vertices.
     #[test]
     fn degeneracy_without_normalising() {
-        let mut seed = 0x2545_f491_u32;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed
-        };
+        let mut r = crate::testutil::Rng::new(0x2545_f491);
+        let mut rnd = || r.u64() as u32;
         let specials = [
             0.0,
             -0.0,

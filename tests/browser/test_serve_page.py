@@ -240,3 +240,76 @@ def test_broken_scene_shows_line_and_column(page, scene_dir):
     scene.write_text("\n".join(lines))
     page.wait_for_selector("#error[hidden]", state="attached", timeout=30000)
     assert page.errors == []
+
+
+def test_path_integrator(page):
+    """The integrator menu offers the path tracer; its bounces follow the
+    command line's default (64), the image changes, and a click's tree says
+    it is the Whitted one."""
+    assert page.evaluate("[...document.querySelector('select[name=integrator]').options].map(o => o.value)") == [
+        "whitted", "ao", "path"]
+    gen = page.evaluate("glint.gen")
+    page.select_option("select[name=spp]", "4")
+    page.wait_for_function(f"glint.gen > {gen} && glint.done && glint.spp === 4", timeout=120000)
+    _, whitted = canvas_now(page)
+    assert page.input_value("input[name=bounces]") == "5"
+    gen = page.evaluate("glint.gen")
+    page.select_option("select[name=integrator]", "path")
+    assert page.input_value("input[name=bounces]") == "64"
+    page.wait_for_function(f"glint.gen > {gen} && glint.done && glint.spp === 4 && !glint.rendering",
+                           timeout=180000)
+    _, path = canvas_now(page)
+    assert mean_abs(path, whitted) > 2.0, mean_abs(path, whitted)
+    page.wait_for_function("glint.tree !== null", timeout=60000)
+    assert "Whitted ray tree" in page.locator("#tree-text").inner_text()
+    shot(page, "10-path")
+    gen = page.evaluate("glint.gen")
+    page.select_option("select[name=integrator]", "whitted")
+    assert page.input_value("input[name=bounces]") == "5"
+    page.wait_for_function(f"glint.gen > {gen} && glint.done && !glint.rendering", timeout=120000)
+
+
+def test_camera_moves_and_resets(page):
+    """Drag orbits, arrow keys orbit, the wheel zooms: each starts a render
+    of the new view; r returns to the scene's camera and its exact image."""
+    page.wait_for_function("glint.done && !glint.rendering", timeout=120000)
+    assert page.evaluate("glint.cam") is None
+    _, start = canvas_now(page)
+    gen = [page.evaluate("glint.gen")]
+    box = page.locator("#image").bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+
+    def moved(before_eye):
+        # A new render of the moved view, to its last pass.
+        page.wait_for_function(f"glint.cam !== null && glint.gen > {gen[0]} && glint.done && !glint.rendering",
+                               timeout=120000)
+        gen[0] = page.evaluate("glint.gen")
+        eye = page.evaluate("glint.cam.eye")
+        assert eye != before_eye, eye
+        return eye
+
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx + 40, cy, steps=8)
+    page.mouse.up()
+    eye = moved(None)
+    _, orbited = canvas_now(page)
+    assert mean_abs(orbited, start) > 2.0, "the image did not follow the drag"
+    page.locator("#image").focus()
+    page.keyboard.press("ArrowUp")
+    eye = moved(eye)
+    page.mouse.move(cx, cy)
+    page.mouse.wheel(0, -200)
+    eye2 = moved(eye)
+    centre = page.evaluate("glint.scene.bounds")
+    mid = [(a + b) / 2 for a, b in zip(centre["min"], centre["max"])]
+    dist = lambda e: sum((x - m) ** 2 for x, m in zip(e, mid)) ** 0.5
+    assert dist(eye2) < dist(eye), (eye, eye2)
+    shot(page, "11-camera-moved")
+    page.locator("#image").focus()
+    page.keyboard.press("r")
+    page.wait_for_function(f"glint.cam === null && glint.gen > {gen[0]} && glint.done && !glint.rendering",
+                           timeout=120000)
+    _, back = canvas_now(page)
+    assert back.tobytes() == start.tobytes(), "r did not return to the scene's image"
+    assert page.errors == []

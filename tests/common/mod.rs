@@ -16,6 +16,11 @@ use std::process::Command;
 #[path = "../../src/testdata.rs"]
 pub mod testdata;
 
+/// The tests' one random generator, shared with the unit tests.
+#[path = "../../src/testutil.rs"]
+pub mod testutil;
+pub use testutil::Rng;
+
 /// The course's scenes, or `None` (test reported as skipped) when the data
 /// folder is absent.
 pub fn scenes(test: &str) -> Option<PathBuf> {

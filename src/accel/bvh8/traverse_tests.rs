@@ -131,17 +131,14 @@ fn octant_copies_use_the_rays_planes() {
     check::<7>();
 }
 
-/// Whole numbers in `[-4, 4]` from an xorshift: boxes and origins on
-/// a shared grid, so origins on planes and zero direction components
-/// come up often.
-struct Grid(u32);
+/// Whole numbers in `[-4, 4]` from the tests' generator: boxes and
+/// origins on a shared grid, so origins on planes and zero direction
+/// components come up often.
+struct Grid(crate::testutil::Rng);
 
 impl Grid {
     fn next(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        (self.0 % 9) as f32 - 4.0
+        self.0.below(9) as f32 - 4.0
     }
 
     /// A node with seven or eight boxes (the rest empty).
@@ -177,7 +174,7 @@ fn avx_boxes_match_portable() {
     }
     // SAFETY: AVX2 and FMA detected just above.
     let avx = unsafe { Avx::new() };
-    let mut g = Grid(0x9e37_79b9);
+    let mut g = Grid(crate::testutil::Rng::new(0x9e37_79b9));
     for _ in 0..20_000 {
         let node = g.node();
         let rd = g.ray(0.5);
@@ -209,7 +206,7 @@ fn avx_boxes_match_portable() {
 /// `origin · inv` does not use it.
 #[test]
 fn integer_reduction_keeps_the_float_tests_boxes() {
-    let mut g = Grid(0x1234_5678);
+    let mut g = Grid(crate::testutil::Rng::new(0x1234_5678));
     let mut kept = 0;
     for _ in 0..20_000 {
         let node = g.node();

@@ -296,7 +296,7 @@ mod tests {
         let mut r = Rng::new(8);
         // Squares in the boundary planes, so hits land on cell faces.
         for _ in 0..60 {
-            let a = r.below3();
+            let a = r.below(3);
             let mut p = r.v(-5.0, 5.0);
             p[a] = l.plane(a, 1 + (r.f() * 5.0) as i32);
             let (u, v) = (Vec3::AXES[(a + 1) % 3], Vec3::AXES[(a + 2) % 3]);

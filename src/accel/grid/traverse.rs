@@ -371,13 +371,8 @@ mod tests {
             Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(2.0, 0.5, 3.0)),
             [7, 3, 5],
         );
-        let mut s = 0x9e3779b97f4a7c15u64;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut r = crate::testutil::Rng::new(1);
+        let mut rnd = move || r.f();
         for _ in 0..500 {
             let o = Vec3::new(rnd() * 5.0 - 2.0, rnd() * 2.0 - 0.75, rnd() * 3.0 + 1.0);
             let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);

@@ -419,10 +419,14 @@ pub async fn traversal(State(app): State<Arc<App>>, Query(q): Q) -> Answer {
         let world = app.world(version, &scene, view.accel);
         let cam = render::camera(&world, &scene, &view);
         let structure = traversal::Structure::build(&world, view.accel).ok_or_else(|| {
+            let why = match view.accel {
+                glint::accel::AccelKind::None => "brute force walks nothing",
+                _ => "the 8-wide BVH's loops record no walk",
+            };
             ApiError(
                 StatusCode::BAD_REQUEST,
                 format!(
-                    "accel {}: brute force walks nothing; choose grid, octree, octree-inner or a bvh",
+                    "accel {}: {why}; choose grid, nested-grid, octree, octree-inner or a binary bvh to see one",
                     view.accel
                 ),
             )

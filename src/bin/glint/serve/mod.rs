@@ -45,9 +45,9 @@ const STYLE_CSS: &str = include_str!("page/style.css");
 pub struct ServeArgs {
     /// Scene file (MIT 6.837 format).
     pub scene: PathBuf,
-    /// Port on 127.0.0.1 (0: any free port; the address is printed).
-    #[arg(long, default_value_t = DEFAULT_PORT)]
-    pub port: u16,
+    /// Port on 127.0.0.1 (0: any free port; the address is printed). Default: 8837, or any free port when 8837 is taken.
+    #[arg(long)]
+    pub port: Option<u16>,
     /// Folder every file the scene reads must be inside (default: the scene's folder).
     #[arg(long, value_name = "DIR")]
     pub root: Option<PathBuf>,
@@ -69,9 +69,9 @@ pub struct ServeArgs {
     /// Samples per pixel the progressive render refines to.
     #[arg(long, default_value_t = 64)]
     pub spp: u32,
-    /// Accelerator the page starts with.
-    #[arg(long, default_value = "bvh")]
-    pub accel: String,
+    /// Accelerator the page starts with (the same names and default as `glint render --accel`).
+    #[arg(long, default_value = "bvh8")]
+    pub accel: glint::accel::AccelKind,
 }
 
 /// Runs `glint serve` until Ctrl-C; a refused request is a usage error.
@@ -83,9 +83,9 @@ pub fn run(a: ServeArgs) -> Result<(), glint::job::JobError> {
         shadows: a.shadows,
         shade_back: a.shade_back,
         spp: a.spp,
-        accel: a.accel.clone(),
+        accel: a.accel.to_string(),
     };
-    serve(&a.scene, a.root.as_deref(), Some(a.port), defaults, "glint")
+    serve(&a.scene, a.root.as_deref(), a.port, defaults, "glint")
         .map_err(glint::job::JobError::Usage)
 }
 

@@ -3,6 +3,7 @@
 //! knows, and a clear message (HTTP 400) otherwise.
 
 use glint::accel::AccelKind;
+use glint::integrator::PathSettings;
 use glint::limits;
 use glint::math::Vec3;
 use glint::render::Filter;
@@ -52,6 +53,8 @@ pub enum IntegratorName {
     Whitted,
     /// Ambient occlusion.
     Ao,
+    /// The path tracer (`glint render --integrator path`).
+    Path,
 }
 
 /// Everything that decides an image, from the query.
@@ -195,8 +198,31 @@ impl Defaults {
             "w": self.size.0, "h": self.size.1, "bounces": self.bounces,
             "weight": self.weight, "shadows": self.shadows, "shade_back": self.shade_back,
             "spp": self.spp, "accel": self.accel,
+            "path_bounces": PathSettings::default().max_bounces,
+            "accels": accel_menu(),
+            "integrators": ["whitted", "ao", "path"],
         })
     }
+}
+
+/// The accelerators the page offers: every name of [`AccelKind::NAMES`]
+/// once per accelerator (aliases such as `bvh-sah` for `bvh` left out),
+/// the command line's default first.
+pub fn accel_menu() -> Vec<String> {
+    let mut seen: Vec<AccelKind> = Vec::new();
+    let mut names = Vec::new();
+    let default = AccelKind::default();
+    for n in
+        std::iter::once(default.to_string()).chain(AccelKind::NAMES.iter().map(|n| (*n).to_owned()))
+    {
+        if let Ok(k) = n.parse::<AccelKind>() {
+            if !seen.contains(&k) {
+                seen.push(k);
+                names.push(n);
+            }
+        }
+    }
+    names
 }
 
 /// The view a query asks for.
@@ -206,14 +232,25 @@ pub fn view(q: &HashMap<String, String>, d: &Defaults, scene_camera: &Camera) ->
     let integrator = match q.get("integrator").map_or("whitted", String::as_str) {
         "whitted" => IntegratorName::Whitted,
         "ao" => IntegratorName::Ao,
+        "path" => IntegratorName::Path,
         s => {
             return Err(format!(
-                "integrator: {} is not whitted or ao",
+                "integrator: {} is not whitted, ao or path",
                 limits::shorten(s)
             ))
         }
     };
-    let accel: AccelKind = named(q, "accel", &d.accel, "an accelerator (bvh8, none, grid, grid:NxNxN, nested-grid, octree, octree-inner, bvh, bvh-median, bvh-midpoint, bvh-hierarchy)")?;
+    let accel: AccelKind = named(
+        q,
+        "accel",
+        &d.accel,
+        "an accelerator (bvh8, none, grid, grid:NxNxN, nested-grid, octree, octree-inner, bvh, bvh-median, bvh-midpoint, bvh-hierarchy)",
+    )?;
+    // As `glint render`: the path tracer's bounces default to its own.
+    let default_bounces = match integrator {
+        IntegratorName::Path => PathSettings::default().max_bounces,
+        _ => d.bounces,
+    };
     if let AccelKind::Grid { res: Some(r) } = accel {
         if r.iter().any(|&n| n > MAX_GRID_RES) {
             return Err(format!(
@@ -229,7 +266,7 @@ pub fn view(q: &HashMap<String, String>, d: &Defaults, scene_camera: &Camera) ->
         accel,
         shadows: flag(q, "shadows", d.shadows)?,
         shade_back: flag(q, "shade_back", d.shade_back)?,
-        bounces: number(q, "bounces", d.bounces, 0, limits::MAX_BOUNCES)?,
+        bounces: number(q, "bounces", default_bounces, 0, limits::MAX_BOUNCES)?,
         weight: float(q, "weight", d.weight, 0.0, f32::MAX)?,
         spp: number(q, "spp", d.spp, 1, limits::MAX_SAMPLES)?,
         sampler: named(

@@ -10,7 +10,7 @@
 //! one pass at the target count.
 
 use super::params::{IntegratorName, View};
-use glint::integrator::{AmbientOcclusion, AoSettings, Whitted};
+use glint::integrator::{AmbientOcclusion, AoSettings, PathSettings, PathTracer, Whitted};
 use glint::math::Vec3;
 use glint::render::{render_image, CameraModel, Control, Rendered, Settings};
 use glint::sampler::{Sampler, SamplerKind};
@@ -86,6 +86,17 @@ pub fn pass(
                 },
             };
             render_image(world, &cam, &ao, &settings, control)
+        }
+        IntegratorName::Path => {
+            // As `glint render --integrator path --bounces N`.
+            let pt = PathTracer::new(
+                world,
+                PathSettings {
+                    max_bounces: view.bounces,
+                    ..PathSettings::default()
+                },
+            );
+            render_image(world, &cam, &pt, &settings, control)
         }
     }
 }

@@ -388,3 +388,98 @@ fn glint_io_reason(e: &io::Error) -> String {
         None => s,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn app() -> App {
+        let dir = std::env::temp_dir();
+        let defaults = Defaults {
+            size: (4, 4),
+            bounces: 5,
+            weight: 0.01,
+            shadows: false,
+            shade_back: false,
+            spp: 1,
+            accel: "bvh8".into(),
+        };
+        App::new(dir.join("none.txt"), dir, defaults).expect("the state")
+    }
+
+    /// An accumulated image of `w`×`h` pixels as far as the cap counts it
+    /// (its size); the buffers stay empty, so the test allocates nothing.
+    fn hold(s: &Session, w: u32, h: u32) {
+        *lock(&s.accum) = Some(Accum {
+            key: String::new(),
+            size: (w, h),
+            sum: Vec::new(),
+            cost: Vec::new(),
+            spp: 1,
+            passes: 1,
+        });
+    }
+
+    fn held(s: &Session) -> bool {
+        lock(&s.accum).is_some()
+    }
+
+    /// Past [`MAX_SESSIONS`] the least recently used session is dropped and
+    /// its render cancelled; the others stay.
+    #[test]
+    fn sessions_past_the_cap_drop_the_least_recently_used() {
+        let app = app();
+        let first = app.session("s0");
+        let flag = first.begin();
+        for i in 1..MAX_SESSIONS {
+            app.session(&format!("s{i}")).begin();
+        }
+        assert_eq!(lock(&app.sessions).len(), MAX_SESSIONS);
+        assert!(app.existing_session("s0").is_some());
+        // s1 is touched again: s0 is now the least recently used.
+        app.session("s1").begin();
+        app.session("one-more").begin();
+        assert_eq!(lock(&app.sessions).len(), MAX_SESSIONS);
+        assert!(app.existing_session("s0").is_none(), "s0 was kept");
+        assert!(flag.load(Ordering::SeqCst), "s0's render was not cancelled");
+        assert!(app.existing_session("s1").is_some());
+        assert!(app.existing_session("one-more").is_some());
+    }
+
+    /// A session that needs room drops the least recently used others'
+    /// images until the total fits in [`MAX_ACCUM_PIXELS`], and no more.
+    #[test]
+    fn accumulated_images_stay_within_the_cap() {
+        let app = app();
+        let side = 2048u32;
+        let each = u64::from(side) * u64::from(side);
+        let fit = (MAX_ACCUM_PIXELS / each) as usize;
+        assert!(fit >= 2, "the cap holds at least two of the largest images");
+        let sessions: Vec<_> = (0..fit)
+            .map(|i| {
+                let s = app.session(&format!("s{i}"));
+                let flag = s.begin();
+                hold(&s, side, side);
+                (s, flag)
+            })
+            .collect();
+        // Room for a small image: nobody is dropped.
+        let me = app.session("me");
+        me.begin();
+        app.make_room(&me, MAX_ACCUM_PIXELS - fit as u64 * each);
+        assert!(sessions.iter().all(|(s, _)| held(s)));
+        // Room for one more large image: exactly the oldest is dropped and
+        // its render cancelled.
+        app.make_room(&me, each);
+        assert!(!held(&sessions[0].0), "the oldest image was kept");
+        assert!(sessions[0].1.load(Ordering::SeqCst));
+        assert!(sessions[1..].iter().all(|(s, _)| held(s)));
+        assert!(sessions[1..].iter().all(|(_, f)| !f.load(Ordering::SeqCst)));
+        // The largest image twice over: the next oldest go too.
+        hold(&me, side, side);
+        app.make_room(&me, 2 * each);
+        let total: u64 = sessions.iter().filter(|(s, _)| held(s)).map(|_| each).sum();
+        assert!(total + 2 * each <= MAX_ACCUM_PIXELS, "{total}");
+        assert!(held(&sessions[fit - 1].0), "the newest image was dropped");
+    }
+}

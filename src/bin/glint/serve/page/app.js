@@ -9,6 +9,10 @@ const KIND_COLOR = {
   transmitted: 'rgb(25,25,229)', occlusion: 'rgb(229,204,25)',
 };
 
+// The camera's frustum in the 3-D view: magenta, a colour no ray kind, walk
+// or grid cell uses (docs/serve.md says so).
+const FRUSTUM = 'rgb(230,60,230)';
+
 const S = {
   sid: 's' + Math.random().toString(36).slice(2, 12),
   gen: 0,            // render generation: a newer one stops the older loop
@@ -249,7 +253,9 @@ function listRays() {
   if (!S.tree) return;
   const t = S.tree;
   $('tree-text').textContent = `Pixel (${t.pixel[0]}, ${t.pixel[1]}): ${t.rays.length} rays (` +
-    Object.entries(t.counts).map(([k, n]) => `${n} ${k}`).join(', ') + `), colour ${fmt(t.color)}.`;
+    Object.entries(t.counts).map(([k, n]) => `${n} ${k}`).join(', ') + `), colour ${fmt(t.color)}.` +
+    (form().integrator.value === 'whitted' ? '' : ' (The Whitted ray tree of this pixel, with these bounces and shadows: '
+      + 'the image is the ' + form().integrator.value + ' integrator\'s.)');
   t.rays.forEach((r, i) => {
     const tr = tb.insertRow();
     const note = r.kind === 'shadow' ? (r.occluded ? ' (blocked)' : ' (reaches the light)') : (r.hit ? '' : ' (escapes)');
@@ -499,7 +505,7 @@ function draw3d() {
   const apex = cam.eye;
   const corners = [[-1, -1], [1, -1], [1, 1], [-1, 1]].map(([sx, sy]) =>
     v3.add(v3.add(v3.add(apex, v3.mul(f, dist)), v3.mul(right, sx * hx)), v3.mul(up, sy * hy)));
-  g.strokeStyle = 'rgb(255,150,40)'; g.lineWidth = 1;
+  g.strokeStyle = FRUSTUM; g.lineWidth = 1;
   g.beginPath();
   for (let i = 0; i < 4; i++) {
     stroke(cam.kind === 'perspective' ? apex : v3.sub(corners[i], v3.mul(f, dist)), corners[i]);
@@ -572,6 +578,11 @@ async function start() {
   $('scene-name').textContent = st.scene;
   document.title = 'glint serve: ' + st.scene;
   const d = st.defaults, f = form();
+  // The menus the server offers: the command line's names, its default first.
+  const fill = (sel, names) => { sel.innerHTML = ''; names.forEach((n) => setOption(sel, n)); };
+  fill(f.integrator, d.integrators);
+  f.integrator.value = d.integrators[0];
+  fill(f.accel, d.accels);
   setOption(f.size, `${d.w}x${d.h}`);
   setOption(f.accel, d.accel);
   setOption(f.spp, d.spp);
@@ -579,6 +590,14 @@ async function start() {
   f.shadows.checked = d.shadows;
   f.shade_back.checked = d.shade_back;
   setupImage(); setup3d();
+  // As `glint render`: the path tracer's bounces default to its own; a
+  // bounce count left at one integrator's default follows the switch.
+  let integ = f.integrator.value;
+  f.integrator.addEventListener('change', () => {
+    const def = (i) => (i === 'path' ? d.path_bounces : d.bounces);
+    if (+f.bounces.value === def(integ)) f.bounces.value = def(f.integrator.value);
+    integ = f.integrator.value;
+  });
   f.addEventListener('change', () => {
     if (S.pick && !S.pick.stale) refreshPick(); else { S.walk = null; drawOverlay(); }
     refine(); loadGrid();
