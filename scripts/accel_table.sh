@@ -12,6 +12,6 @@ cd "$(dirname "$0")/.."
 course="${GLINT_SHARED:-../shared}/scenes/6837"
 cargo build --release --bin glint
 args=(--size 128 --runs 3 --none-limit 5 "$@")
-./target/release/glint bench --only mesh_knot,tree,_x64 "${args[@]}"
+"${CARGO_TARGET_DIR:-target}"/release/glint bench --only mesh_knot,tree,_x64 "${args[@]}"
 echo
-./target/release/glint bench --course "$course" --only bunny_mesh,logo "${args[@]}"
+"${CARGO_TARGET_DIR:-target}"/release/glint bench --course "$course" --only bunny_mesh,logo "${args[@]}"

@@ -39,7 +39,7 @@ for rep in $(seq 1 "$reps"); do
     for t in ${THREADS:-1 2}; do
       echo "rep $rep: $m, $t thread(s)" >&2
       "$work/embree_bench" "$work/$m.obj" "$work/rays/$m" "$t" > "$out/embree.$m.$t.$rep.txt"
-      ./target/release/glint bench rays "$work/$m.obj" "$work/rays/$m" --threads "$t" --json \
+      "${CARGO_TARGET_DIR:-target}"/release/glint bench rays "$work/$m.obj" "$work/rays/$m" --threads "$t" --json \
         > "$out/glint.$m.$t.$rep.json"
       if [ -n "${BASELINE:-}" ]; then
         "$BASELINE" bench rays "$work/$m.obj" "$work/rays/$m" --threads "$t" --json \

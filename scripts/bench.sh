@@ -14,4 +14,4 @@ mkdir -p "$work"
 [ -x "$work/meshgen" ] || gcc -O3 -o "$work/meshgen" "$shared/anchors/meshgen.c" -lm
 [ -f "$work/sphere1m.obj" ] || "$work/meshgen" 296 "$work/sphere1m.obj"
 cargo build --release --bin glint
-./target/release/glint bench --mesh "$work/sphere1m.obj" "${@:2}"
+"${CARGO_TARGET_DIR:-target}"/release/glint bench --mesh "$work/sphere1m.obj" "${@:2}"

@@ -11,7 +11,7 @@
 # Each render is 64x64, limited to 120 s and 4 GiB of address space.
 set -u
 dir=${1:?usage: scripts/conformance.sh DIR [GLINT]}
-glint=${2:-target/release/glint}
+glint=${2:-${CARGO_TARGET_DIR:-target}/release/glint}
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail=0

@@ -14,7 +14,7 @@ shift $(( $# >= 2 ? 2 : 1 ))
 flags=("$@")
 [ ${#flags[@]} -gt 0 ] || flags=(--size 320 240 --spp 16 --sampler sobol --filter gaussian:0.6 --shadows --shade-back --bounces 5)
 cargo build --release --quiet --bin glint
-glint=target/release/glint
+glint=${CARGO_TARGET_DIR:-target}/release/glint
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 threads=$(( $(nproc) / n )); [ "$threads" -ge 1 ] || threads=1
