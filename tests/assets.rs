@@ -340,7 +340,7 @@ fn a_smooth_sphere_matches_the_analytic_one() {
     let (w, h) = (160, 160);
     let sphere = frame(
         &lit(Shape::Sphere {
-            center: Vec3::ZERO,
+            center: Vec3::ZERO.as_dvec3(),
             radius: 1.0,
         }),
         w,

@@ -7,6 +7,7 @@ use crate::math::{Mat4, Vec3};
 use crate::scene::{
     Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc, TextureKind,
 };
+use glam::DVec3;
 use std::path::Path;
 
 const CAMERA: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n";
@@ -240,7 +241,7 @@ fn objects() {
     assert_eq!(
         l[0].0,
         ShapeDesc::Sphere {
-            center: Vec3::new(1.0, 2.0, 3.0),
+            center: Vec3::new(1.0, 2.0, 3.0).as_dvec3(),
             radius: 2.0
         }
     );
@@ -251,7 +252,10 @@ fn objects() {
             offset: -1.0
         }
     );
-    assert_eq!(l[2].0, ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]));
+    assert_eq!(
+        l[2].0,
+        ShapeDesc::Triangle([DVec3::ZERO, DVec3::X, DVec3::Y])
+    );
     let Node::Group(top) = &s.root else { panic!() };
     assert!(
         matches!(&top[3], Node::Transform { matrix, child } if *matrix == Mat4::from_translation(Vec3::X).as_dmat4() && **child == Node::Group(vec![]))
