@@ -61,13 +61,17 @@ fn xf(matrix: Mat4, child: Node) -> Node {
 
 fn sphere(c: Vec3, r: f32) -> Node {
     shape(ShapeDesc::Sphere {
-        center: c,
+        center: c.as_dvec3(),
         radius: r,
     })
 }
 
 fn triangle(a: Vec3, b: Vec3, c: Vec3) -> Node {
-    shape(ShapeDesc::Triangle([a, b, c]))
+    shape(ShapeDesc::Triangle([
+        a.as_dvec3(),
+        b.as_dvec3(),
+        c.as_dvec3(),
+    ]))
 }
 
 /// A mesh of `n` random triangles over `k` shared vertices in a box of size
@@ -137,7 +141,7 @@ fn mixed(r: &mut Rng) -> Node {
     if r.chance(0.5) {
         kids.push(shape(ShapeDesc::Plane {
             normal: r.unit(),
-            offset: r.range(-6.0, 6.0),
+            offset: f64::from(r.range(-6.0, 6.0)),
         }));
     }
     // Drawn after everything above, so the scenes' other contents are as
@@ -149,7 +153,7 @@ fn mixed(r: &mut Rng) -> Node {
         normal[r.below(3)] = if r.chance(0.5) { 1.0 } else { -2.0 };
         kids.push(shape(ShapeDesc::Plane {
             normal,
-            offset: r.range(-6.0, 6.0),
+            offset: f64::from(r.range(-6.0, 6.0)),
         }));
     }
     if r.chance(0.5) {

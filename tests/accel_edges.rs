@@ -69,20 +69,28 @@ fn lattice_scene() -> Scene {
         o[axis] = r.below(5) as f32;
         let o = Vec3::from(o);
         let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
-        kids.push(shape(ShapeDesc::Triangle([o, o + u, o + u + v])));
-        kids.push(shape(ShapeDesc::Triangle([o, o + u + v, o + v])));
+        kids.push(shape(ShapeDesc::Triangle([
+            o.as_dvec3(),
+            (o + u).as_dvec3(),
+            (o + u + v).as_dvec3(),
+        ])));
+        kids.push(shape(ShapeDesc::Triangle([
+            o.as_dvec3(),
+            (o + u + v).as_dvec3(),
+            (o + v).as_dvec3(),
+        ])));
     }
     for _ in 0..12 {
         let c = Vec3::new(r.below(5) as f32, r.below(5) as f32, r.below(5) as f32);
         kids.push(shape(ShapeDesc::Sphere {
-            center: c,
+            center: c.as_dvec3(),
             radius: 0.25,
         }));
     }
     kids.push(shape(ShapeDesc::Triangle([
-        Vec3::new(0.0, 0.1, 0.0),
-        Vec3::new(4.0, 3.9, 0.3),
-        Vec3::new(0.2, 3.5, 4.0),
+        Vec3::new(0.0, 0.1, 0.0).as_dvec3(),
+        Vec3::new(4.0, 3.9, 0.3).as_dvec3(),
+        Vec3::new(0.2, 3.5, 4.0).as_dvec3(),
     ])));
     Scene {
         camera: Camera::Perspective {
@@ -275,7 +283,7 @@ fn edge_rays_agree_with_brute_force_for_every_accelerator() {
 /// draws floor where the balls' lower halves are.
 fn balls_on_a_floor() -> Scene {
     let floor = |a: Vec3, b: Vec3, c: Vec3| Node::Shape {
-        shape: ShapeDesc::Triangle([a, b, c]),
+        shape: ShapeDesc::Triangle([a.as_dvec3(), b.as_dvec3(), c.as_dvec3()]),
         material: Some(0),
     };
     let (p0, p1, p2, p3) = (
@@ -288,7 +296,7 @@ fn balls_on_a_floor() -> Scene {
     for i in 0..5 {
         kids.push(Node::Shape {
             shape: ShapeDesc::Sphere {
-                center: Vec3::new(-6.0 + 3.0 * i as f32, 1.0, -2.0 + i as f32),
+                center: Vec3::new(-6.0 + 3.0 * i as f32, 1.0, -2.0 + i as f32).as_dvec3(),
                 radius: 1.0,
             },
             material: Some(1),

@@ -10,7 +10,9 @@
 //!   one's on the lit side.
 //! - OBJ `vn` normals shade smooth exactly as the same normals in a PLY file.
 //! - The course's 40k bunny scene moved 10⁵ units away (camera and all)
-//!   renders the same image: scene numbers are read in double precision.
+//!   renders the same image: scene numbers are read in double precision;
+//!   so does a scene of spheres, triangles, planes and point and area
+//!   lights whose every coordinate is written 10⁵ units further.
 
 use glint::format::load_scene;
 use glint::integrator::Whitted;
@@ -340,7 +342,7 @@ fn a_smooth_sphere_matches_the_analytic_one() {
     let (w, h) = (160, 160);
     let sphere = frame(
         &lit(Shape::Sphere {
-            center: Vec3::ZERO,
+            center: Vec3::ZERO.as_dvec3(),
             radius: 1.0,
         }),
         w,
@@ -512,6 +514,190 @@ fn a_scene_moved_1e5_away_renders_the_same_image() {
     assert!(
         f32_read > 0.001,
         "the f32 camera centre changed only {:.3}%: the check cannot fail",
+        100.0 * f32_read
+    );
+}
+
+/// The scene of [`a_scene_written_1e5_away_renders_the_same_image`] with
+/// every position written `d` units further along each axis: the camera's
+/// centre, the spheres' and area lights' centres, the triangles' vertices,
+/// the point light's position, the quad light's corner and the planes'
+/// offsets (their normals are axes, so `n · (d, d, d)` is `d` or `-d`).
+/// Directions, edges, radii and colours are the same whatever `d`. Each
+/// moved number is written as the shortest decimal that reads back as the
+/// f64 sum (`0.37 + 1e5` → `100000.37`), so the text is the scene moved as a
+/// user would move it, by editing its coordinates (no `Transform`).
+fn scene_with_every_kind_of_position(d: f64) -> String {
+    let p = |x: f64, y: f64, z: f64| format!("{} {} {}", x + d, y + d, z + d);
+    let o = |offset: f64, sign: f64| format!("{}", offset + sign * d);
+    format!(
+        "PerspectiveCamera {{
+    center {camera}
+    direction -0.05 -0.27 -1
+    up 0 1 0
+    angle 38
+}}
+Lights {{
+    numLights 4
+    PointLight {{ position {point} color 0.55 0.5 0.45 attenuation 1 0 0.01 }}
+    AreaLight {{ quad {{ corner {corner} edge1 1.7 0 0.1 edge2 0 0 1.3 }} color 1 0.95 0.9 power 40 }}
+    AreaLight {{ disk {{ center {disk} normal 1 -0.7 0.2 radius 0.45 }} color 0.6 0.7 1 power 25 }}
+    AreaLight {{ sphere {{ center {ball} radius 0.33 }} color 1 0.8 0.6 power 20 }}
+}}
+Samples {{ shadow 4 }}
+Background {{ color 0.11 0.13 0.17 ambientLight 0.07 0.07 0.07 }}
+Materials {{
+    numMaterials 4
+    PhongMaterial {{ diffuseColor 0.8 0.78 0.75 }}
+    PhongMaterial {{ diffuseColor 0.83 0.27 0.21 specularColor 0.5 0.5 0.5 exponent 30 }}
+    PhongMaterial {{ diffuseColor 0.23 0.59 0.81 specularColor 0.3 0.3 0.3 exponent 60 }}
+    PhongMaterial {{ diffuseColor 0.91 0.77 0.31 }}
+}}
+Group {{
+    numObjects 14
+    MaterialIndex 0
+    Plane {{ normal 0 1 0 offset {floor} }}
+    Plane {{ normal 0 0 1 offset {wall} }}
+    Plane {{ normal -1 0 0 offset {side} }}
+    MaterialIndex 1
+    Sphere {{ center {s1} radius 1.03 }}
+    MaterialIndex 2
+    Sphere {{ center {s2} radius 0.49 }}
+    Sphere {{ center {s3} radius 0.27 }}
+    MaterialIndex 3
+    Triangle {{ vertex0 {t0} vertex1 {t1} vertex2 {t2} }}
+    Triangle {{ vertex0 {t0} vertex1 {t2} vertex2 {t3} }}
+    Triangle {{ vertex0 {u0} vertex1 {u1} vertex2 {u2} }}
+    MaterialIndex 2
+    Triangle {{ vertex0 {v0} vertex1 {v1} vertex2 {v2} }}
+    Triangle {{ vertex0 {v0} vertex1 {v2} vertex2 {v3} }}
+    MaterialIndex 1
+    Triangle {{ vertex0 {w0} vertex1 {w1} vertex2 {w2} }}
+    Triangle {{ vertex0 {w2} vertex1 {w1} vertex2 {w3} }}
+    Triangle {{ vertex0 {w0} vertex1 {w2} vertex2 {w3} }}
+}}
+",
+        camera = p(0.37, 2.13, 8.71),
+        point = p(3.31, 6.67, 4.13),
+        corner = p(-1.33, 4.91, -0.71),
+        disk = p(-4.11, 3.29, 1.23),
+        ball = p(2.93, 2.71, -2.09),
+        floor = o(-0.61, 1.0),
+        wall = o(-4.37, 1.0),
+        side = o(-4.73, -1.0),
+        s1 = p(-1.17, 0.43, -0.29),
+        s2 = p(1.61, -0.11, 0.77),
+        s3 = p(0.23, -0.33, 1.91),
+        t0 = p(-3.1, -0.6, -3.3),
+        t1 = p(-0.7, -0.6, -3.3),
+        t2 = p(-0.7, 1.9, -3.9),
+        t3 = p(-3.1, 1.9, -3.9),
+        u0 = p(2.07, -0.59, -1.13),
+        u1 = p(3.41, -0.59, -0.21),
+        u2 = p(2.71, 1.37, -0.77),
+        v0 = p(-2.93, -0.6, 1.07),
+        v1 = p(-1.91, -0.6, 1.73),
+        v2 = p(-1.91, 0.17, 1.73),
+        v3 = p(-2.93, 0.17, 1.07),
+        w0 = p(0.53, 1.61, -1.87),
+        w1 = p(1.49, 1.13, -1.21),
+        w2 = p(0.97, 2.33, -1.09),
+        w3 = p(1.87, 2.07, -2.01),
+    )
+}
+
+/// `scene` as the reader that rounded positions to f32 saw it: every
+/// sphere, triangle, plane offset, point light and area light position
+/// rounded to the nearest f32 (the camera's centre and transforms were
+/// already f64 then, and stay so).
+fn positions_read_as_f32(scene: &Scene) -> Scene {
+    fn node(n: &Node) -> Node {
+        let f32 = |p: glam::DVec3| p.as_vec3().as_dvec3();
+        match n {
+            Node::Group(children) => Node::Group(children.iter().map(node).collect()),
+            Node::Transform { matrix, child } => Node::Transform {
+                matrix: *matrix,
+                child: Box::new(node(child)),
+            },
+            Node::Moving { motion, child } => Node::Moving {
+                motion: motion.clone(),
+                child: Box::new(node(child)),
+            },
+            Node::Shape { shape, material } => Node::Shape {
+                shape: match shape {
+                    Shape::Sphere { center, radius } => Shape::Sphere {
+                        center: f32(*center),
+                        radius: *radius,
+                    },
+                    Shape::Plane { normal, offset } => Shape::Plane {
+                        normal: *normal,
+                        offset: *offset as f32 as f64,
+                    },
+                    Shape::Triangle(v) => Shape::Triangle(v.map(f32)),
+                    Shape::Mesh(m) => Shape::Mesh(m.clone()),
+                },
+                material: *material,
+            },
+        }
+    }
+    Scene {
+        root: node(&scene.root),
+        lights: (scene.lights.iter())
+            .map(|l| l.map_points(|p| p.as_vec3().as_dvec3()))
+            .collect(),
+        ..scene.clone()
+    }
+}
+
+/// Issue 39's "numbers read exactly" for every kind of position: a scene
+/// of spheres, triangles, planes, a point light and quad, disk and sphere
+/// area lights, written again with every coordinate 10⁵ units further
+/// (camera too, by editing the numbers, no `Transform`), renders the same
+/// image: at most 0.1% of the 320x320 pixels change at all. Positions are
+/// read in f64 and rounded once, in rendering space.
+///
+/// The check can fail: the far scene with its positions rounded to f32 as
+/// they were read before (1/128 of a unit at 10⁵) must change more than
+/// 0.1% of the pixels.
+#[test]
+fn a_scene_written_1e5_away_renders_the_same_image() {
+    let path = std::path::Path::new("positions.txt");
+    let near_text = scene_with_every_kind_of_position(0.0);
+    let far_text = scene_with_every_kind_of_position(1e5);
+    assert!(near_text.contains("center 0.37 2.13 8.71"), "{near_text}");
+    assert!(
+        far_text.contains("center 100000.37 100002.13 100008.71"),
+        "{far_text}"
+    );
+    let near = glint::format::parse_scene(&near_text, path).unwrap();
+    let far = glint::format::parse_scene(&far_text, path).unwrap();
+    let s = near.summary();
+    assert_eq!((s.spheres, s.planes, s.triangles, s.lights), (3, 3, 8, 4));
+    let n = 320;
+    let base = image8(&near, n);
+    let background = base[0];
+    let covered = base.iter().filter(|&&c| c != background).count();
+    assert!(
+        covered > (n * n / 2) as usize,
+        "{covered} pixels show the scene"
+    );
+    let exact = changed(&base, &image8(&far, n));
+    let f32_read = changed(&base, &image8(&positions_read_as_f32(&far), n));
+    println!(
+        "written 1e5 away: {:.3}% of {} pixels changed (positions read as f64), \
+         {:.3}% with the positions rounded to f32 when read",
+        100.0 * exact,
+        n * n,
+        100.0 * f32_read
+    );
+    assert!(
+        exact <= 0.001,
+        "{:.3}% of the pixels changed",
+        100.0 * exact
+    );
+    assert!(
+        f32_read > 0.001,
+        "positions read as f32 changed only {:.3}%: the check cannot fail",
         100.0 * f32_read
     );
 }

@@ -41,11 +41,17 @@ fn shape(shape: ShapeDesc, material: usize) -> Node {
 }
 
 fn plane(normal: Vec3, offset: f32) -> ShapeDesc {
-    ShapeDesc::Plane { normal, offset }
+    ShapeDesc::Plane {
+        normal,
+        offset: f64::from(offset),
+    }
 }
 
 fn sphere(center: Vec3, radius: f32) -> ShapeDesc {
-    ShapeDesc::Sphere { center, radius }
+    ShapeDesc::Sphere {
+        center: center.as_dvec3(),
+        radius,
+    }
 }
 
 fn white() -> Material {
@@ -88,7 +94,7 @@ const H_OCC: f32 = 2.0;
 
 fn penumbra_scene() -> Scene {
     let quad = AreaShape::Quad {
-        corner: Vec3::new(-2.0, H_LIGHT, -2.0),
+        corner: Vec3::new(-2.0, H_LIGHT, -2.0).as_dvec3(),
         edge1: Vec3::new(4.0, 0.0, 0.0),
         edge2: Vec3::new(0.0, 0.0, 4.0),
     };
@@ -106,8 +112,14 @@ fn penumbra_scene() -> Scene {
     );
     let root = Node::Group(vec![
         shape(plane(Vec3::Y, 0.0), 0),
-        shape(ShapeDesc::Triangle([a, b, c]), 0),
-        shape(ShapeDesc::Triangle([a, c, d]), 0),
+        shape(
+            ShapeDesc::Triangle([a.as_dvec3(), b.as_dvec3(), c.as_dvec3()]),
+            0,
+        ),
+        shape(
+            ShapeDesc::Triangle([a.as_dvec3(), c.as_dvec3(), d.as_dvec3()]),
+            0,
+        ),
     ]);
     scene(look_down(), vec![light], vec![white()], root)
 }
@@ -815,8 +827,14 @@ fn glossy_reflection_converges_to_the_lobe_integral() {
         vec![glossy, white()],
         Node::Group(vec![
             shape(plane(Vec3::Y, 0.0), 0),
-            shape(ShapeDesc::Triangle([a, b, c]), 1),
-            shape(ShapeDesc::Triangle([a, c, d]), 1),
+            shape(
+                ShapeDesc::Triangle([a.as_dvec3(), b.as_dvec3(), c.as_dvec3()]),
+                1,
+            ),
+            shape(
+                ShapeDesc::Triangle([a.as_dvec3(), c.as_dvec3(), d.as_dvec3()]),
+                1,
+            ),
         ]),
     );
     sc.background.ambient = Vec3::ONE;

@@ -80,7 +80,6 @@ fn moved(scene: &Scene, m: Move) -> Scene {
             Mat4::from_scale(Vec3::splat(1.0 / k)),
         ),
     };
-    let point = |p: Vec3| matrix.transform_point3(p);
     // The camera's centre is f64 in a scene: moved exactly.
     let point64 = |p: glam::DVec3| matrix.as_dmat4().transform_point3(p);
     s.root = Node::Transform {
@@ -121,7 +120,7 @@ fn moved(scene: &Scene, m: Move) -> Scene {
             ..
         } = l
         {
-            *position = point(*position);
+            *position = point64(*position);
             if let Move::Scale(k) = m {
                 // 1/(c + l·d + q·d²) with d scaled by k.
                 *attenuation = Vec3::new(attenuation.x, attenuation.y / k, attenuation.z / (k * k));
@@ -217,7 +216,7 @@ fn own_whitted() -> Scene {
         },
         lights: vec![
             Light::Point {
-                position: Vec3::new(-4.0, 7.0, 6.0),
+                position: Vec3::new(-4.0, 7.0, 6.0).as_dvec3(),
                 color: Vec3::splat(1.6),
                 attenuation: Vec3::new(1.0, 0.05, 0.01),
             },
@@ -267,14 +266,14 @@ fn own_whitted() -> Scene {
             ),
             shape(
                 ShapeDesc::Sphere {
-                    center: Vec3::new(-0.9, 0.2, -1.6),
+                    center: Vec3::new(-0.9, 0.2, -1.6).as_dvec3(),
                     radius: 1.2,
                 },
                 3,
             ),
             shape(
                 ShapeDesc::Sphere {
-                    center: Vec3::new(0.9, -0.1, 0.6),
+                    center: Vec3::new(0.9, -0.1, 0.6).as_dvec3(),
                     radius: 0.9,
                 },
                 4,
@@ -358,12 +357,12 @@ fn own_mesh_room() -> Scene {
         },
         lights: vec![
             Light::Point {
-                position: Vec3::new(2.0, 6.0, 3.0),
+                position: Vec3::new(2.0, 6.0, 3.0).as_dvec3(),
                 color: Vec3::new(0.9, 0.8, 0.7),
                 attenuation: Vec3::new(1.0, 0.0, 0.004),
             },
             Light::Point {
-                position: Vec3::new(-4.0, 3.0, -1.0),
+                position: Vec3::new(-4.0, 3.0, -1.0).as_dvec3(),
                 color: Vec3::new(0.2, 0.3, 0.5),
                 attenuation: Vec3::X,
             },
@@ -394,8 +393,22 @@ fn own_mesh_room() -> Scene {
             }),
         ],
         root: Node::Group(vec![
-            shape(ShapeDesc::Triangle([floor[0], floor[1], floor[2]]), 0),
-            shape(ShapeDesc::Triangle([floor[0], floor[2], floor[3]]), 0),
+            shape(
+                ShapeDesc::Triangle([
+                    floor[0].as_dvec3(),
+                    (floor[1]).as_dvec3(),
+                    (floor[2]).as_dvec3(),
+                ]),
+                0,
+            ),
+            shape(
+                ShapeDesc::Triangle([
+                    floor[0].as_dvec3(),
+                    (floor[2]).as_dvec3(),
+                    (floor[3]).as_dvec3(),
+                ]),
+                0,
+            ),
             xf(
                 Mat4::from_translation(Vec3::new(-0.5, 1.3, -0.5))
                     * Mat4::from_rotation_y(0.5)
@@ -409,7 +422,7 @@ fn own_mesh_room() -> Scene {
                     * Mat4::from_scale(Vec3::new(0.4, 0.6, 1.0)),
                 shape(
                     ShapeDesc::Sphere {
-                        center: Vec3::ZERO,
+                        center: Vec3::ZERO.as_dvec3(),
                         radius: 1.0,
                     },
                     3,

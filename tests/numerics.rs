@@ -28,15 +28,30 @@ fn shape(shape: ShapeDesc, material: usize) -> Node {
 }
 
 fn sphere(center: Vec3, radius: f32, material: usize) -> Node {
-    shape(ShapeDesc::Sphere { center, radius }, material)
+    shape(
+        ShapeDesc::Sphere {
+            center: center.as_dvec3(),
+            radius,
+        },
+        material,
+    )
 }
 
 fn plane(normal: Vec3, offset: f32, material: usize) -> Node {
-    shape(ShapeDesc::Plane { normal, offset }, material)
+    shape(
+        ShapeDesc::Plane {
+            normal,
+            offset: f64::from(offset),
+        },
+        material,
+    )
 }
 
 fn tri(a: Vec3, b: Vec3, c: Vec3, material: usize) -> Node {
-    shape(ShapeDesc::Triangle([a, b, c]), material)
+    shape(
+        ShapeDesc::Triangle([a.as_dvec3(), b.as_dvec3(), c.as_dvec3()]),
+        material,
+    )
 }
 
 fn xf(matrix: Mat4, child: Node) -> Node {
@@ -70,7 +85,7 @@ fn ortho(center: Vec3, direction: Vec3, up: Vec3, size: f32) -> Camera {
 
 fn point_light(position: Vec3, attenuation: Vec3) -> Light {
     Light::Point {
-        position,
+        position: position.as_dvec3(),
         color: Vec3::splat(0.8),
         attenuation,
     }
@@ -414,7 +429,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
                 point_light(v(3.0, 5.0, 4.0), Vec3::ZERO),
                 point_light(v(0.0, 1.0, 0.0), Vec3::ZERO),
                 Light::Point {
-                    position: v(0.0, 0.0, 3.0),
+                    position: v(0.0, 0.0, 3.0).as_dvec3(),
                     color: Vec3::ZERO,
                     attenuation: Vec3::ZERO,
                 },
@@ -479,7 +494,7 @@ pub fn extreme_scenes() -> Vec<(&'static str, Scene)> {
     let mut extreme = scene(
         look_at_origin(),
         vec![Light::Point {
-            position: v(0.0, 0.0, 5.0),
+            position: v(0.0, 0.0, 5.0).as_dvec3(),
             color: Vec3::splat(1e30),
             attenuation: Vec3::X,
         }],

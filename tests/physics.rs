@@ -34,7 +34,10 @@ fn scene(root: Node, materials: Vec<Phong>, lights: Vec<Light>, bg: Background) 
 
 fn plane(normal: Vec3, offset: f32, material: usize) -> Node {
     Node::Shape {
-        shape: ShapeDesc::Plane { normal, offset },
+        shape: ShapeDesc::Plane {
+            normal,
+            offset: f64::from(offset),
+        },
         material: Some(material),
     }
 }
@@ -276,7 +279,7 @@ fn floor_under_light(h: f32, k: Vec3, extra: Vec<Node>, shadows: bool) -> Vec3 {
             Phong::default(),
         ],
         vec![Light::Point {
-            position: Vec3::new(0.0, h, 0.0),
+            position: Vec3::new(0.0, h, 0.0).as_dvec3(),
             color: Vec3::ONE,
             attenuation: k,
         }],
@@ -312,9 +315,9 @@ fn geometry_beyond_a_point_light_casts_no_shadow() {
     // A shelf between floor and light does shadow it.
     let shelf = Node::Shape {
         shape: ShapeDesc::Triangle([
-            Vec3::new(-1.0, 0.5, -1.0),
-            Vec3::new(1.0, 0.5, -1.0),
-            Vec3::new(0.0, 0.5, 1.0),
+            Vec3::new(-1.0, 0.5, -1.0).as_dvec3(),
+            Vec3::new(1.0, 0.5, -1.0).as_dvec3(),
+            Vec3::new(0.0, 0.5, 1.0).as_dvec3(),
         ]),
         material: Some(1),
     };
@@ -346,7 +349,7 @@ fn geometry_beyond_an_area_light_casts_no_shadow() {
             ],
             vec![Light::Area {
                 shape: AreaShape::Disk {
-                    center: Vec3::new(0.0, 1.0, 0.0),
+                    center: Vec3::new(0.0, 1.0, 0.0).as_dvec3(),
                     normal: Vec3::NEG_Y,
                     radius: 0.5,
                 },
@@ -406,7 +409,7 @@ fn point_light_attenuation_follows_the_closed_form() {
             ..Phong::default()
         }],
         vec![Light::Point {
-            position: Vec3::new(0.0, 2.0, 0.0),
+            position: Vec3::new(0.0, 2.0, 0.0).as_dvec3(),
             color: Vec3::ONE,
             attenuation: Vec3::new(0.5, 0.25, 0.125),
         }],
@@ -448,7 +451,7 @@ fn phong_highlight_sits_at_the_half_vector() {
         let s = scene(
             Node::Shape {
                 shape: ShapeDesc::Sphere {
-                    center: Vec3::ZERO,
+                    center: Vec3::ZERO.as_dvec3(),
                     radius: 1.0,
                 },
                 material: Some(0),

@@ -147,7 +147,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             Case {
                 kind,
                 node: node(ShapeDesc::Sphere {
-                    center: c,
+                    center: c.as_dvec3(),
                     radius: rad,
                 }),
                 m: DMat4::from_translation(c.as_dvec3())
@@ -165,7 +165,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             let m = DMat4::from_translation(pos) * rotation(r) * DMat4::from_scale(scale);
             let shape = if kind == Kind::Ellipsoid {
                 ShapeDesc::Sphere {
-                    center: Vec3::ZERO,
+                    center: Vec3::ZERO.as_dvec3(),
                     radius: 1.0,
                 }
             } else {
@@ -199,7 +199,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             let m =
                 DMat4::from_scale_rotation_translation(s.as_dvec3(), q.as_dquat(), t.as_dvec3());
             let sphere = node(ShapeDesc::Sphere {
-                center: Vec3::ZERO,
+                center: Vec3::ZERO.as_dvec3(),
                 radius: 1.0,
             });
             Case {
@@ -229,7 +229,7 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
                 if area > 0.2 * size * size {
                     return Case {
                         kind,
-                        node: node(ShapeDesc::Triangle(v)),
+                        node: node(ShapeDesc::Triangle(v.map(|p| p.as_dvec3()))),
                         m: DMat4::IDENTITY,
                         pts: d.to_vec(),
                         time: 0.0,
@@ -245,7 +245,10 @@ fn random_case(r: &mut Rng, kind: Kind) -> Case {
             let (nd, len) = (n.as_dvec3(), n.as_dvec3().length());
             Case {
                 kind,
-                node: node(ShapeDesc::Plane { normal: n, offset }),
+                node: node(ShapeDesc::Plane {
+                    normal: n,
+                    offset: f64::from(offset),
+                }),
                 m: DMat4::IDENTITY,
                 pts: vec![
                     nd * (offset as f64 / len / len),

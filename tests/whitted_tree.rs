@@ -75,7 +75,10 @@ fn secondary_rays_never_rehit_their_own_surface() {
 
 fn sphere(center: Vec3, radius: f32, material: usize) -> Node {
     Node::Shape {
-        shape: ShapeDesc::Sphere { center, radius },
+        shape: ShapeDesc::Sphere {
+            center: center.as_dvec3(),
+            radius,
+        },
         material: Some(material),
     }
 }
@@ -260,7 +263,7 @@ fn back_faces_are_black_unless_shade_back() {
         angle_deg: 30.0,
     };
     scene.lights = vec![Light::Point {
-        position: Vec3::ZERO,
+        position: Vec3::ZERO.as_dvec3(),
         color: Vec3::ONE,
         attenuation: Vec3::X,
     }];
@@ -416,7 +419,10 @@ fn glossy_reflection_averages_its_lobe_and_spreads_only_at_the_first_hit() {
         ambient: Vec3::ZERO,
     };
     let plane = |normal: Vec3, offset: f32| Node::Shape {
-        shape: ShapeDesc::Plane { normal, offset },
+        shape: ShapeDesc::Plane {
+            normal,
+            offset: f64::from(offset),
+        },
         material: Some(1),
     };
     scene.root = Node::Group(vec![plane(Vec3::Y, 0.0)]);

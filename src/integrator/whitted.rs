@@ -18,7 +18,7 @@ use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
 use crate::math::{Ray, Spawn, SurfacePoint, Vec3, SHADOW_EPSILON};
 use crate::sampler::SampleStream;
-use crate::scene::Light;
+use crate::scene::{Light, RenderLight};
 use crate::stats::Counters;
 use crate::world::{Hit, World};
 
@@ -268,7 +268,7 @@ impl Whitted {
         world: &World,
         ray: &Ray,
         from: &mut Spawn,
-        light: &Light,
+        light: &RenderLight,
         m: &crate::scene::Phong,
         n: Vec3,
         ng: Vec3,
@@ -313,7 +313,7 @@ impl Whitted {
         world: &World,
         ray: &Ray,
         from: &mut Spawn,
-        light: &Light,
+        light: &RenderLight,
         inc: &Incident,
         m: &crate::scene::Phong,
         n: Vec3,
@@ -401,7 +401,7 @@ impl ShadowTarget {
     /// Where the shadow ray for the light `inc` from `light` goes: the
     /// sampled point of an area light, a point light's position, or a
     /// directional light's direction.
-    fn of(light: &Light, inc: &Incident) -> Self {
+    fn of(light: &RenderLight, inc: &Incident) -> Self {
         match (inc.at, light) {
             (Some(at), _) => ShadowTarget::Surface(at),
             (None, Light::Point { position, .. }) => ShadowTarget::Point(*position),

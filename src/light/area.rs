@@ -6,11 +6,11 @@
 use super::Incident;
 pub use crate::math::warp::concentric_disk;
 use crate::math::{gamma, SurfacePoint, Vec2, Vec3};
-use crate::scene::AreaShape;
+use crate::scene::{AreaShape, RenderAreaShape};
 use std::f32::consts::{PI, TAU};
 
 /// Surface area of the emitting side(s): flat lights emit from both faces.
-pub fn emitting_area(shape: &AreaShape) -> f32 {
+pub fn emitting_area(shape: &RenderAreaShape) -> f32 {
     match *shape {
         AreaShape::Quad { edge1, edge2, .. } => 2.0 * edge1.cross(edge2).length(),
         AreaShape::Disk { radius, .. } => 2.0 * PI * radius * radius,
@@ -19,7 +19,7 @@ pub fn emitting_area(shape: &AreaShape) -> f32 {
 }
 
 /// Radiance of a light of `power` (flux) and `color` over `shape`.
-pub fn radiance(shape: &AreaShape, color: Vec3, power: f32) -> Vec3 {
+pub fn radiance(shape: &RenderAreaShape, color: Vec3, power: f32) -> Vec3 {
     let a = emitting_area(shape);
     if a > 0.0 {
         color * (power / (PI * a))
@@ -31,7 +31,7 @@ pub fn radiance(shape: &AreaShape, color: Vec3, power: f32) -> Vec3 {
 /// Light arriving at `p` from the point of `shape` chosen by `u ∈ [0,1)²`,
 /// already divided by the sample's density (`radiance · cos θ_light · A / d²`
 /// for area sampling, `radiance · Ω` for cone sampling).
-pub fn sample(shape: &AreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
+pub fn sample(shape: &RenderAreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
     match *shape {
         AreaShape::Quad {
             corner,
@@ -183,7 +183,7 @@ mod tests {
     use crate::math::testing::{check_error_box, Lcg};
 
     /// Mean of the estimator over a fine grid of samples.
-    fn irradiance(shape: &AreaShape, p: Vec3, n: Vec3) -> f32 {
+    fn irradiance(shape: &RenderAreaShape, p: Vec3, n: Vec3) -> f32 {
         let k = 200;
         let mut sum = 0.0;
         for i in 0..k {

@@ -11,7 +11,7 @@ pub mod source;
 pub use source::{AreaLight, Emitter, EmitterHit, LightPoint, LightSample, LightSource};
 
 use crate::math::{SurfacePoint, Vec2, Vec3};
-use crate::scene::Light;
+use crate::scene::{Light, RenderLight};
 
 /// Light arriving at a point from one light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,14 +38,14 @@ impl Incident {
 
 /// Whether the light comes from a single point or direction (one shadow ray
 /// says everything) rather than from a surface that must be sampled.
-pub fn is_delta(light: &Light) -> bool {
+pub fn is_delta(light: &RenderLight) -> bool {
     !matches!(light, Light::Area { .. })
 }
 
 /// What `light` sends to point `p` through the light point chosen by `u`
 /// (ignored by point and directional lights), divided by the density of
 /// that choice: the mean over stratified `u` is the light's contribution.
-pub fn sample_light(light: &Light, p: Vec3, u: Vec2) -> Incident {
+pub fn sample_light(light: &RenderLight, p: Vec3, u: Vec2) -> Incident {
     match light {
         Light::Area {
             shape,
@@ -58,7 +58,7 @@ pub fn sample_light(light: &Light, p: Vec3, u: Vec2) -> Incident {
 
 /// What `light` sends to point `p`; an area light is taken at the centre of
 /// its sample domain (use [`sample_light`] to sample it).
-pub fn incident(light: &Light, p: Vec3) -> Incident {
+pub fn incident(light: &RenderLight, p: Vec3) -> Incident {
     match light {
         Light::Area { .. } => sample_light(light, p, Vec2::splat(0.5)),
         // Directions are normalised in f64: in f32, the length of a vector

@@ -17,7 +17,7 @@ use super::area::{self, disk_point, quad_point, sphere_cone, toward};
 use super::{point_incident, Incident};
 use crate::math::warp::uniform_triangle;
 use crate::math::{Ray, SurfacePoint, Vec2, Vec3};
-use crate::scene::{AreaShape, Light};
+use crate::scene::{AreaShape, Light, RenderAreaShape, RenderLight};
 use crate::shape::{Plane, Sphere, Triangle};
 use std::f32::consts::{PI, TAU};
 
@@ -135,7 +135,7 @@ impl LightSource {
     /// The runtime light of a scene light (already in rendering space):
     /// directions normalised, an area light's radiance computed once from
     /// its power, exactly as the Whitted entry points compute them.
-    pub fn from_scene(light: &Light) -> Self {
+    pub fn from_scene(light: &RenderLight) -> Self {
         match light {
             Light::Point {
                 position,
@@ -239,7 +239,7 @@ impl LightSource {
 
 impl Emitter {
     /// The emitter of a scene area light's shape.
-    pub fn from_scene(shape: &AreaShape) -> Self {
+    pub fn from_scene(shape: &RenderAreaShape) -> Self {
         match *shape {
             AreaShape::Quad {
                 corner,

@@ -1,8 +1,12 @@
 use crate::math::Vec3;
+use glam::DVec3;
 
-/// A light source.
+/// A light source. Positions are of type `P`: `DVec3` in a scene
+/// description (as the file gave them, in double precision), `Vec3` in
+/// rendering space ([`RenderLight`], what `crate::world` makes of it: moved
+/// so that the camera is at the origin and rounded once).
 #[derive(Clone, Debug, PartialEq)]
-pub enum Light {
+pub enum Light<P = DVec3> {
     /// Light from infinitely far away, travelling along `direction`.
     Directional {
         /// Direction the light travels (towards the scene); need not be unit.
@@ -13,7 +17,7 @@ pub enum Light {
     /// A point light whose intensity falls off as `1 / (c + l·d + q·d²)`.
     Point {
         /// Position.
-        position: Vec3,
+        position: P,
         /// Colour and intensity.
         color: Vec3,
         /// Constant, linear and quadratic attenuation coefficients.
@@ -25,7 +29,7 @@ pub enum Light {
     /// dimmer per unit area, and its shadows are softer).
     Area {
         /// The emitting surface.
-        shape: AreaShape,
+        shape: AreaShape<P>,
         /// Colour of the emitted light.
         color: Vec3,
         /// Total emitted flux, in units of `color`.
@@ -33,13 +37,52 @@ pub enum Light {
     },
 }
 
-/// The surface of an area light. Flat lights emit from both faces.
+/// A light in rendering space: single-precision positions, camera at the
+/// origin.
+pub type RenderLight = Light<Vec3>;
+
+/// An area light's surface in rendering space.
+pub type RenderAreaShape = AreaShape<Vec3>;
+
+impl<P: Copy> Light<P> {
+    /// The same light with every position mapped by `f` (directions,
+    /// edges and radii unchanged).
+    pub fn map_points<Q>(&self, f: impl Fn(P) -> Q) -> Light<Q> {
+        match self {
+            Light::Directional { direction, color } => Light::Directional {
+                direction: *direction,
+                color: *color,
+            },
+            Light::Point {
+                position,
+                color,
+                attenuation,
+            } => Light::Point {
+                position: f(*position),
+                color: *color,
+                attenuation: *attenuation,
+            },
+            Light::Area {
+                shape,
+                color,
+                power,
+            } => Light::Area {
+                shape: shape.map_points(f),
+                color: *color,
+                power: *power,
+            },
+        }
+    }
+}
+
+/// The surface of an area light. Flat lights emit from both faces. Points
+/// are of type `P`, as in [`Light`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum AreaShape {
+pub enum AreaShape<P = DVec3> {
     /// The parallelogram `corner + s·edge1 + t·edge2`, `s, t ∈ [0, 1]`.
     Quad {
         /// One corner.
-        corner: Vec3,
+        corner: P,
         /// First edge from `corner`.
         edge1: Vec3,
         /// Second edge from `corner`.
@@ -48,7 +91,7 @@ pub enum AreaShape {
     /// A flat disk.
     Disk {
         /// Centre.
-        center: Vec3,
+        center: P,
         /// Normal (need not be unit).
         normal: Vec3,
         /// Radius.
@@ -57,8 +100,38 @@ pub enum AreaShape {
     /// A sphere, emitting outwards.
     Sphere {
         /// Centre.
-        center: Vec3,
+        center: P,
         /// Radius.
         radius: f32,
     },
+}
+
+impl<P: Copy> AreaShape<P> {
+    /// The same surface with its point mapped by `f`.
+    pub fn map_points<Q>(&self, f: impl Fn(P) -> Q) -> AreaShape<Q> {
+        match *self {
+            AreaShape::Quad {
+                corner,
+                edge1,
+                edge2,
+            } => AreaShape::Quad {
+                corner: f(corner),
+                edge1,
+                edge2,
+            },
+            AreaShape::Disk {
+                center,
+                normal,
+                radius,
+            } => AreaShape::Disk {
+                center: f(center),
+                normal,
+                radius,
+            },
+            AreaShape::Sphere { center, radius } => AreaShape::Sphere {
+                center: f(center),
+                radius,
+            },
+        }
+    }
 }

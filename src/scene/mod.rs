@@ -10,7 +10,7 @@ mod node;
 
 pub use camera::Camera;
 pub use effects::{AmbientOcclusion, EffectSamples, Effects, Lens};
-pub use light::{AreaShape, Light};
+pub use light::{AreaShape, Light, RenderAreaShape, RenderLight};
 pub use material::{Material, Phong, TextureKind};
 pub use node::{Mesh, Node, ShapeDesc};
 

@@ -1,6 +1,6 @@
 use super::Summary;
-use crate::math::{Aabb, Mat4, Motion, Vec3};
-use glam::DMat4;
+use crate::math::{Aabb, Motion, Vec3};
+use glam::{DMat4, DVec3};
 use std::sync::Arc;
 
 /// A triangle mesh: shared vertices, triangles by index.
@@ -52,12 +52,16 @@ impl Mesh {
 
 /// A geometric shape in its own (object) space, as the scene describes it;
 /// `world::build` turns it into the renderable [`crate::shape::Shape`].
+/// Positions (centres, vertices, a plane's offset) are in double precision,
+/// as the file gave them, until `world::build` moves them into rendering
+/// space and rounds them once; directions, radii and mesh-file vertices are
+/// single precision.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ShapeDesc {
     /// Sphere.
     Sphere {
         /// Centre.
-        center: Vec3,
+        center: DVec3,
         /// Radius.
         radius: f32,
     },
@@ -66,10 +70,10 @@ pub enum ShapeDesc {
         /// Normal.
         normal: Vec3,
         /// Offset along the normal, in units of `|normal|`.
-        offset: f32,
+        offset: f64,
     },
     /// A single triangle (counter-clockwise front).
-    Triangle([Vec3; 3]),
+    Triangle([DVec3; 3]),
     /// A mesh, shared between all places that use the same file.
     Mesh(Arc<Mesh>),
 }
@@ -107,7 +111,8 @@ pub enum Node {
 }
 
 impl Node {
-    /// World bounds of this subtree seen through `m` (object-to-world).
+    /// World bounds of this subtree seen through `m` (object-to-world),
+    /// composed and applied in f64, each point rounded once.
     ///
     /// A group is the union of its children. Under a transform, triangles and
     /// meshes transform their vertices (the tightest box); a sphere transforms
@@ -115,29 +120,31 @@ impl Node {
     /// planes are unbounded unless axis-aligned (see `shape::Plane::bounds`).
     /// The world never needs these (it flattens first); they are what the
     /// tree looks like to a ray before flattening, for `glint info`.
-    pub fn bounds(&self, m: &Mat4) -> Aabb {
+    pub fn bounds(&self, m: &DMat4) -> Aabb {
+        let point = |p: DVec3| m.transform_point3(p).as_vec3();
         match self {
             Node::Group(children) => children
                 .iter()
                 .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds(m))),
-            Node::Transform { matrix, child } => child.bounds(&(m.as_dmat4() * *matrix).as_mat4()),
+            Node::Transform { matrix, child } => child.bounds(&(*m * *matrix)),
             Node::Moving { motion, child } => {
-                motion.swept_bounds(&child.bounds(&Mat4::IDENTITY), m)
+                motion.swept_bounds(&child.bounds(&DMat4::IDENTITY), &m.as_mat4())
             }
             Node::Shape { shape, .. } => match shape {
-                ShapeDesc::Sphere { center, radius } => Aabb::new(
-                    *center - Vec3::splat(*radius),
-                    *center + Vec3::splat(*radius),
-                )
-                .transformed(m),
-                ShapeDesc::Plane { normal, offset } => crate::shape::Plane::new(*normal, *offset)
-                    .and_then(|p| p.transformed(&m.as_dmat4()))
-                    .map_or(Aabb::EMPTY, |p| p.bounds()),
-                ShapeDesc::Triangle(v) => {
-                    Aabb::from_points(v.iter().map(|&p| m.transform_point3(p)))
+                ShapeDesc::Sphere { center, radius } => {
+                    let r = *radius as f64;
+                    Aabb::from_points((0..8).map(|i| {
+                        let corner = |bit: usize| if i & bit == 0 { -r } else { r };
+                        point(*center + DVec3::new(corner(1), corner(2), corner(4)))
+                    }))
                 }
+                ShapeDesc::Plane { normal, offset } => {
+                    crate::shape::Plane::from_f64(*normal, *offset, m)
+                        .map_or(Aabb::EMPTY, |p| p.bounds())
+                }
+                ShapeDesc::Triangle(v) => Aabb::from_points(v.iter().map(|&p| point(p))),
                 ShapeDesc::Mesh(mesh) => {
-                    Aabb::from_points(mesh.positions.iter().map(|&p| m.transform_point3(p)))
+                    Aabb::from_points(mesh.positions.iter().map(|&p| point(p.as_dvec3())))
                 }
             },
         }
@@ -182,6 +189,7 @@ impl Node {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Mat4;
 
     fn xf(m: Mat4, child: Node) -> Node {
         Node::Transform {
@@ -192,7 +200,7 @@ mod tests {
 
     fn tri() -> Node {
         Node::Shape {
-            shape: ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
+            shape: ShapeDesc::Triangle([DVec3::ZERO, DVec3::X, DVec3::Y]),
             material: None,
         }
     }
@@ -201,12 +209,12 @@ mod tests {
     fn group_is_the_union() {
         let s = Node::Shape {
             shape: ShapeDesc::Sphere {
-                center: Vec3::new(5.0, 0.0, 0.0),
+                center: Vec3::new(5.0, 0.0, 0.0).as_dvec3(),
                 radius: 1.0,
             },
             material: None,
         };
-        let b = Node::Group(vec![tri(), s]).bounds(&Mat4::IDENTITY);
+        let b = Node::Group(vec![tri(), s]).bounds(&DMat4::IDENTITY);
         assert_eq!(b.min, Vec3::new(0.0, -1.0, -1.0));
         assert_eq!(b.max, Vec3::new(6.0, 1.0, 1.0));
     }
@@ -214,7 +222,7 @@ mod tests {
     #[test]
     fn transformed_triangle_uses_its_vertices_not_box_corners() {
         let m = Mat4::from_rotation_z(std::f32::consts::FRAC_PI_4);
-        let tight = xf(m, tri()).bounds(&Mat4::IDENTITY);
+        let tight = xf(m, tri()).bounds(&DMat4::IDENTITY);
         let corners = Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)).transformed(&m);
         // The box of the rotated triangle is strictly smaller than the rotated box.
         assert!(tight.surface_area() < corners.surface_area());
@@ -225,21 +233,22 @@ mod tests {
     fn transformed_sphere_uses_the_8_corners() {
         let s = Node::Shape {
             shape: ShapeDesc::Sphere {
-                center: Vec3::ZERO,
+                center: Vec3::ZERO.as_dvec3(),
                 radius: 1.0,
             },
             material: None,
         };
         let m =
             Mat4::from_translation(Vec3::X) * Mat4::from_rotation_z(std::f32::consts::FRAC_PI_4);
-        let b = xf(m, s).bounds(&Mat4::IDENTITY);
+        let b = xf(m, s).bounds(&DMat4::IDENTITY);
         assert!((b.max.x - (1.0 + 2f32.sqrt())).abs() < 1e-5);
     }
 
     #[test]
     fn nested_transforms_compose() {
         let inner = xf(Mat4::from_scale(Vec3::splat(2.0)), tri());
-        let b = xf(Mat4::from_translation(Vec3::new(0.0, 0.0, 3.0)), inner).bounds(&Mat4::IDENTITY);
+        let b =
+            xf(Mat4::from_translation(Vec3::new(0.0, 0.0, 3.0)), inner).bounds(&DMat4::IDENTITY);
         assert_eq!(b.max, Vec3::new(2.0, 2.0, 3.0));
     }
 }

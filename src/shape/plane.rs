@@ -26,11 +26,27 @@ impl Plane {
     /// so a plane moved far away and back (the rendering space) keeps its
     /// offset to f32 precision.
     pub fn transformed(&self, m: &DMat4) -> Option<Self> {
-        let p = m.transform_point3(self.normal.as_dvec3() * self.offset as f64);
-        let n = m
-            .inverse()
-            .transpose()
-            .transform_vector3(self.normal.as_dvec3());
+        Self::carried(self.normal, self.offset as f64, m)
+    }
+
+    /// The plane `n · p = d` of a scene description, `d` in double
+    /// precision as the file gave it, carried through `m` as
+    /// [`Self::transformed`] does and rounded once: a plane far from the
+    /// origin keeps its place in rendering space. `None` for a zero normal
+    /// or a singular `m`. The normal is made unit in f32 as [`Self::new`]
+    /// makes it.
+    pub fn from_f64(n: Vec3, d: f64, m: &DMat4) -> Option<Self> {
+        let len = n.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return None;
+        }
+        Self::carried(n / len, d / len as f64, m)
+    }
+
+    /// The plane `normal · p = offset` (`normal` unit) carried through `m`.
+    fn carried(normal: Vec3, offset: f64, m: &DMat4) -> Option<Self> {
+        let p = m.transform_point3(normal.as_dvec3() * offset);
+        let n = m.inverse().transpose().transform_vector3(normal.as_dvec3());
         let len = n.length();
         let n = n / len;
         let plane = Self {

@@ -107,7 +107,7 @@ impl Voxels {
                     }
                     for tri in face(b.min, b.max, axis, up) {
                         faces.push(Node::Shape {
-                            shape: ShapeDesc::Triangle(tri),
+                            shape: ShapeDesc::Triangle(tri.map(|p| p.as_dvec3())),
                             material: Some(material),
                         });
                     }

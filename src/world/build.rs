@@ -20,7 +20,7 @@ use crate::accel::{
 };
 use crate::light::LightSource;
 use crate::math::Vec3;
-use crate::scene::{AreaShape, Camera, Light, Material, Node, Phong, Scene, ShapeDesc as Desc};
+use crate::scene::{Camera, Light, Material, Node, Phong, RenderLight, Scene, ShapeDesc as Desc};
 use crate::shape::{Moving, Plane, Shape, Sphere, Transformed, Triangle};
 use glam::{DMat4, DVec3};
 use std::time::Instant;
@@ -85,7 +85,7 @@ impl World {
             (0..f.prims.len() as u32).partition(|&i| f.prims[i as usize].bounds().is_finite());
         let start = Instant::now();
         let accel = build_aggregate(opts.accel, &f.prims, bounded, &tree);
-        let lights: Vec<Light> = (scene.lights.iter())
+        let lights: Vec<RenderLight> = (scene.lights.iter())
             .map(|l| light_to_render_space(l, origin))
             .collect();
         let sources: Vec<LightSource> = lights.iter().map(LightSource::from_scene).collect();
@@ -119,8 +119,8 @@ fn camera_center(c: &Camera) -> DVec3 {
 }
 
 /// A world-space point in rendering space: subtracted in f64, rounded once.
-fn point_to_render(p: Vec3, origin: DVec3) -> Vec3 {
-    (p.as_dvec3() - origin).as_vec3()
+fn point_to_render(p: DVec3, origin: DVec3) -> Vec3 {
+    (p - origin).as_vec3()
 }
 
 fn camera_to_render_space(c: &Camera, origin: DVec3) -> Camera {
@@ -133,19 +133,10 @@ fn camera_to_render_space(c: &Camera, origin: DVec3) -> Camera {
     c
 }
 
-fn light_to_render_space(l: &Light, origin: DVec3) -> Light {
-    let mut l = l.clone();
-    match &mut l {
-        Light::Point { position, .. } => *position = point_to_render(*position, origin),
-        Light::Area { shape, .. } => match shape {
-            AreaShape::Quad { corner, .. } => *corner = point_to_render(*corner, origin),
-            AreaShape::Disk { center, .. } | AreaShape::Sphere { center, .. } => {
-                *center = point_to_render(*center, origin)
-            }
-        },
-        Light::Directional { .. } => {}
-    }
-    l
+/// A light in rendering space: its position (a point light's, an area
+/// light's corner or centre) moved and rounded by [`point_to_render`].
+fn light_to_render_space(l: &Light, origin: DVec3) -> RenderLight {
+    l.map_points(|p| point_to_render(p, origin))
 }
 
 /// The 6.837 textures' matrices map *world* points into texture space; a
@@ -278,15 +269,9 @@ impl Flattener {
         }
         let point = |p: Vec3| m.transform_point3(p.as_dvec3()).as_vec3();
         match shape {
-            Desc::Sphere { center, radius } => {
-                let s = Sphere {
-                    center: *center,
-                    radius: *radius,
-                };
-                push(bake_sphere(s, m));
-            }
+            Desc::Sphere { center, radius } => push(bake_sphere(*center, *radius, m)),
             Desc::Plane { normal, offset } => {
-                if let Some(p) = Plane::new(*normal, *offset).and_then(|p| p.transformed(&m)) {
+                if let Some(p) = Plane::from_f64(*normal, *offset, &m) {
                     push(Shape::Plane(p));
                 }
             }
@@ -343,18 +328,22 @@ impl Flattener {
     }
 }
 
-/// The object-space shapes of a description (a mesh gives one per triangle).
+/// The object-space shapes of a description (a mesh gives one per
+/// triangle), rounded to f32 in object space.
 fn object_shapes(d: &Desc) -> Vec<Shape> {
     match d {
         Desc::Sphere { center, radius } => vec![Shape::Sphere(Sphere {
-            center: *center,
+            center: center.as_vec3(),
             radius: *radius,
         })],
-        Desc::Plane { normal, offset } => Plane::new(*normal, *offset)
+        Desc::Plane { normal, offset } => Plane::new(*normal, *offset as f32)
             .map(Shape::Plane)
             .into_iter()
             .collect(),
-        Desc::Triangle([a, b, c]) => vec![Shape::Triangle(Triangle::new(*a, *b, *c))],
+        Desc::Triangle(v) => {
+            let [a, b, c] = v.map(|p| p.as_vec3());
+            vec![Shape::Triangle(Triangle::new(a, b, c))]
+        }
         Desc::Mesh(mesh) => mesh
             .triangles
             .iter()
@@ -366,8 +355,9 @@ fn object_shapes(d: &Desc) -> Vec<Shape> {
     }
 }
 
-fn bake_triangle(v: &[Vec3; 3], m: &DMat4) -> Triangle {
-    let [a, b, c] = v.map(|p| m.transform_point3(p.as_dvec3()).as_vec3());
+/// A triangle carried through `m` in f64, each vertex rounded once.
+fn bake_triangle(v: &[DVec3; 3], m: &DMat4) -> Triangle {
+    let [a, b, c] = v.map(|p| m.transform_point3(p).as_vec3());
     oriented(a, b, c, m.determinant() < 0.0)
 }
 
@@ -382,8 +372,9 @@ fn oriented(a: Vec3, b: Vec3, c: Vec3, flip: bool) -> Triangle {
 }
 
 /// A sphere under a similarity (rotation, uniform scale, translation) is a
-/// sphere; anything else keeps its matrix.
-fn bake_sphere(s: Sphere, m: DMat4) -> Shape {
+/// sphere, its centre carried in f64 and rounded once; anything else keeps
+/// its matrix (the centre then rounded in object space).
+fn bake_sphere(center: DVec3, radius: f32, m: DMat4) -> Shape {
     let cols = [
         m.x_axis.truncate(),
         m.y_axis.truncate(),
@@ -396,7 +387,11 @@ fn bake_sphere(s: Sphere, m: DMat4) -> Shape {
         && cols[1].dot(cols[2]).abs() <= rel * scale
         && cols[0].dot(cols[2]).abs() <= rel * scale
         && m.row(3) == glam::DVec4::W;
-    let center = m.transform_point3(s.center.as_dvec3()).as_vec3();
+    let s = Sphere {
+        center: center.as_vec3(),
+        radius,
+    };
+    let center = m.transform_point3(center).as_vec3();
     if uniform {
         Shape::Sphere(Sphere {
             center,
@@ -439,7 +434,7 @@ mod tests {
     fn sphere() -> Node {
         Node::Shape {
             shape: Desc::Sphere {
-                center: Vec3::ZERO,
+                center: Vec3::ZERO.as_dvec3(),
                 radius: 1.0,
             },
             material: None,
@@ -498,7 +493,7 @@ mod tests {
         let plane = |offset: f32| Node::Shape {
             shape: Desc::Plane {
                 normal: Vec3::Y,
-                offset,
+                offset: f64::from(offset),
             },
             material: None,
         };
@@ -541,7 +536,7 @@ mod tests {
     fn flattening_off_gives_the_same_hits() {
         let m = Mat4::from_translation(Vec3::new(0.5, 0.0, 0.0)) * Mat4::from_rotation_z(0.4);
         let tri = Node::Shape {
-            shape: Desc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]),
+            shape: Desc::Triangle([DVec3::ZERO, DVec3::X, DVec3::Y]),
             material: None,
         };
         let root = Node::Group(vec![xf(m, tri), xf(m, sphere())]);
@@ -570,7 +565,7 @@ mod tests {
     #[test]
     fn mirrored_triangle_keeps_inverse_transpose_normal() {
         let m = DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0));
-        let t = bake_triangle(&[Vec3::ZERO, Vec3::X, Vec3::Y], &m);
+        let t = bake_triangle(&[DVec3::ZERO, DVec3::X, DVec3::Y], &m);
         // (M^-1)^T (0,0,1) = (0,0,1).
         assert!((t.normal - Vec3::Z).length() < 1e-6);
     }

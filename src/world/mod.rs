@@ -20,7 +20,7 @@ pub use build::BuildOptions;
 use crate::accel::Aggregate;
 use crate::light::{EmitterHit, Incident, LightSource};
 use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
-use crate::scene::{Background, Camera, Light, Material};
+use crate::scene::{Background, Camera, Material, RenderLight};
 use crate::shape::Shape;
 use crate::stats::Counters;
 use glam::DVec3;
@@ -86,8 +86,8 @@ pub struct World {
     /// The same table with the scene's own texture matrices, for lookups at
     /// object-space points (`TextureSpace::Object`).
     object_materials: Vec<Material>,
-    /// Lights (point lights moved into rendering space).
-    lights: Vec<Light>,
+    /// Lights moved into rendering space (positions rounded once).
+    lights: Vec<RenderLight>,
     /// The scene's camera in rendering space (its centre at the origin):
     /// build the [`crate::render::CameraModel`] for this world from it.
     camera: Camera,
@@ -152,7 +152,7 @@ impl World {
 
     /// The scene's lights in rendering space.
     #[inline]
-    pub fn lights(&self) -> &[Light] {
+    pub fn lights(&self) -> &[RenderLight] {
         &self.lights
     }
 
@@ -399,7 +399,7 @@ impl World {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{AreaShape, Node, Scene, ShapeDesc as Desc};
+    use crate::scene::{AreaShape, Light, Node, Scene, ShapeDesc as Desc};
 
     /// A quad light over a sphere: the aggregate and the occlusion test see
     /// only the sphere (the Whitted tree's rays are what they were), and
@@ -408,7 +408,7 @@ mod tests {
     #[test]
     fn emitters_are_seen_only_on_request() {
         let quad = AreaShape::Quad {
-            corner: Vec3::new(-1.0, 3.0, -1.0),
+            corner: DVec3::new(-1.0, 3.0, -1.0),
             edge1: Vec3::new(2.0, 0.0, 0.0),
             edge2: Vec3::new(0.0, 0.0, 2.0),
         };
@@ -421,7 +421,7 @@ mod tests {
             },
             lights: vec![
                 Light::Point {
-                    position: Vec3::new(0.0, 5.0, 0.0),
+                    position: Vec3::new(0.0, 5.0, 0.0).as_dvec3(),
                     color: Vec3::ONE,
                     attenuation: Vec3::X,
                 },
@@ -435,7 +435,7 @@ mod tests {
             materials: vec![],
             root: Node::Group(vec![Node::Shape {
                 shape: Desc::Sphere {
-                    center: Vec3::ZERO,
+                    center: Vec3::ZERO.as_dvec3(),
                     radius: 1.0,
                 },
                 material: None,

@@ -276,7 +276,8 @@ fn stadium_scene(mesh: &Path, floor: Option<(f32, f32)>) -> Result<Scene, String
         Vec3::new(w, y, -w),
         Vec3::new(w, y, w),
         Vec3::new(-w, y, w),
-    ];
+    ]
+    .map(|p| p.as_dvec3());
     let floor = |a: usize, b: usize, c: usize| Node::Shape {
         shape: ShapeDesc::Triangle([corners[a], corners[b], corners[c]]),
         material: Some(0),

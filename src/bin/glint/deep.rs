@@ -72,7 +72,7 @@ fn branch(depth: u32, branching: u32, leaf: &Arc<Mesh>, seed: u32) -> Node {
         Mat4::from_translation(Vec3::Y) * Mat4::from_scale(Vec3::new(0.15, 1.0, 0.15)),
         shape(
             ShapeDesc::Sphere {
-                center: Vec3::ZERO,
+                center: Vec3::ZERO.as_dvec3(),
                 radius: 1.0,
             },
             0,
@@ -126,7 +126,7 @@ pub fn instances(mesh: Mesh, n: u32) -> Scene {
 /// materials (bark and leaves).
 fn framed(root: Node) -> Scene {
     let mut scene = Scene::for_mesh(Mesh::default());
-    let b = root.bounds(&Mat4::IDENTITY);
+    let b = root.bounds(&glam::DMat4::IDENTITY);
     let (c, r) = (b.center(), 0.5 * b.extent().length());
     let view = Vec3::new(0.3, 0.4, 1.0).normalize();
     scene.camera = glint::scene::Camera::Perspective {

@@ -631,7 +631,7 @@ fn punctual(light: &gltf::khr_lights_punctual::Light, m: glam::DMat4) -> Option<
             color,
         },
         Kind::Point | Kind::Spot { .. } => Light::Point {
-            position: m.transform_point3(glam::DVec3::ZERO).as_vec3(),
+            position: m.transform_point3(glam::DVec3::ZERO),
             color,
             attenuation: Vec3::new(0.0, 0.0, 1.0),
         },

@@ -46,7 +46,7 @@ fn parse(src: &str) -> Result<Scene, ParseError> {
 #[test]
 fn a_triangle_with_its_node_transform() {
     let s = parse(&doc(&data_uri(&buffer()), 3, "")).unwrap();
-    let b = s.root.bounds(&crate::math::Mat4::IDENTITY);
+    let b = s.root.bounds(&glam::DMat4::IDENTITY);
     assert_eq!(
         (b.min, b.max),
         (Vec3::new(0., 0., -5.), Vec3::new(1., 1., -5.))
@@ -99,7 +99,7 @@ fn camera_lights_and_materials_are_mapped() {
         [Light::Point {
             position, color, ..
         }] => {
-            assert_eq!(*position, Vec3::new(1., 2., 3.));
+            assert_eq!(*position, glam::DVec3::new(1., 2., 3.));
             assert!((*color - Vec3::new(1., 0.5, 0.)).length() < 1e-6);
         }
         l => panic!("{l:?}"),

@@ -121,7 +121,9 @@ impl<'a> Parser<'a> {
     }
 
     /// [`Parser::number`] in double precision, for the numbers that place
-    /// things in the world (the camera's centre, transforms): they keep every
+    /// things in the world (the camera's centre, transforms, a sphere's or
+    /// area light's centre, a triangle's vertices, a plane's offset, a point
+    /// light's position, a quad light's corner): they keep every
     /// digit the file gives until the scene is moved into the camera-centred
     /// rendering space. The numbers accepted are exactly those
     /// [`Parser::number`] accepts.

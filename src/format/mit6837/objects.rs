@@ -6,8 +6,9 @@ use super::lexer::{Kind, Token};
 use super::Result;
 use crate::format::diagnostic::{io_reason, quote};
 use crate::format::obj::LoadError;
-use crate::math::{Keyframe, Motion, Quat, Vec3};
+use crate::math::{Keyframe, Motion, Quat};
 use crate::scene::{Node, ShapeDesc};
+use glam::DVec3;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -254,7 +255,7 @@ impl<'a> Parser<'a> {
         let (mut center, mut radius) = (None, None);
         let close = self.fields(kw, &["center", "radius"], |p, f| {
             match f.text {
-                "center" => center = Some(p.vec3()?.0),
+                "center" => center = Some(p.dvec3()?.0),
                 _ => radius = Some(p.number()?),
             }
             Ok(())
@@ -273,7 +274,7 @@ impl<'a> Parser<'a> {
         let close = self.fields(kw, &["normal", "offset"], |p, f| {
             match f.text {
                 "normal" => normal = Some(p.vec3()?),
-                _ => offset = Some(p.number()?.0),
+                _ => offset = Some(p.number64()?.0),
             }
             Ok(())
         })?;
@@ -292,14 +293,14 @@ impl<'a> Parser<'a> {
     /// `Triangle { vertex0 V vertex1 V vertex2 V }`. Degenerate triangles are
     /// allowed: they are harmless, and meshes are full of them.
     fn triangle(&mut self, kw: Token<'a>) -> Result<ShapeDesc> {
-        let mut v: [Option<Vec3>; 3] = [None; 3];
+        let mut v: [Option<DVec3>; 3] = [None; 3];
         let names = ["vertex0", "vertex1", "vertex2"];
         let close = self.fields(kw, &names, |p, f| {
             let i = names.iter().position(|n| *n == f.text).unwrap_or(0);
-            v[i] = Some(p.vec3()?.0);
+            v[i] = Some(p.dvec3()?.0);
             Ok(())
         })?;
-        let mut out = [Vec3::ZERO; 3];
+        let mut out = [DVec3::ZERO; 3];
         for i in 0..3 {
             out[i] = self.require(v[i], close, names[i], kw)?;
         }

@@ -8,6 +8,7 @@ use crate::math::{Motion, Vec3};
 use crate::scene::{
     AmbientOcclusion, AreaShape, Background, Camera, EffectSamples, Effects, Lens, Light, Scene,
 };
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -285,37 +286,38 @@ impl<'a> Parser<'a> {
         } else {
             &["position", "color", "attenuation"]
         };
-        let (mut place, mut color, mut attenuation) = (None, None, None);
+        // A direction is read in single precision, a position in double.
+        let (mut direction, mut position, mut color, mut attenuation) = (None, None, None, None);
         let close = self.fields(kw, names, |p, f| {
             match f.text {
                 "color" => color = Some(p.color()?),
                 "attenuation" => {
                     attenuation = Some(p.vec3_within(f32::MAX, "an attenuation coefficient")?)
                 }
-                _ => place = Some(p.vec3()?),
+                "direction" => direction = Some(p.vec3()?),
+                _ => position = Some(p.dvec3()?.0),
             }
             Ok(())
         })?;
-        let (place, place_toks) = self.require(place, close, names[0], kw)?;
-        let color = self.require(color, close, "color", kw)?;
-        // A directional light without a direction would light nothing.
-        if directional && place.as_dvec3().length_squared() == 0.0 {
-            return Err(self.error_found(
-                Some(place_toks[0]),
-                "a non-zero light direction",
-                vec_text(&place_toks),
-            ));
+        if directional {
+            let (direction, toks) = self.require(direction, close, names[0], kw)?;
+            let color = self.require(color, close, "color", kw)?;
+            // A directional light without a direction would light nothing.
+            if direction.as_dvec3().length_squared() == 0.0 {
+                return Err(self.error_found(
+                    Some(toks[0]),
+                    "a non-zero light direction",
+                    vec_text(&toks),
+                ));
+            }
+            return Ok(Light::Directional { direction, color });
         }
-        Ok(match directional {
-            true => Light::Directional {
-                direction: place,
-                color,
-            },
-            false => Light::Point {
-                position: place,
-                color,
-                attenuation: attenuation.unwrap_or(Vec3::X),
-            },
+        let position = self.require(position, close, names[0], kw)?;
+        let color = self.require(color, close, "color", kw)?;
+        Ok(Light::Point {
+            position,
+            color,
+            attenuation: attenuation.unwrap_or(Vec3::X),
         })
     }
 
@@ -354,11 +356,15 @@ impl<'a> Parser<'a> {
             "disk" => &["center", "normal", "radius"],
             _ => &["center", "radius"],
         };
+        // The first field (corner or centre) is a position, read in double
+        // precision; the others are directions.
+        let mut place: Option<DVec3> = None;
         let mut v: [Option<(Vec3, [Token<'a>; 3])>; 3] = [None; 3];
         let mut radius = None;
         let close = self.fields(kw, names, |p, f| {
             match f.text {
                 "radius" => radius = Some(p.number_where(|r| r > 0.0, "a positive radius")?),
+                "corner" | "center" => place = Some(p.dvec3()?.0),
                 name => {
                     let i = names.iter().position(|n| *n == name).unwrap_or(0);
                     v[i] = Some(p.vec3()?);
@@ -368,7 +374,7 @@ impl<'a> Parser<'a> {
         })?;
         match kw.text {
             "quad" => {
-                let corner = self.require(v[0], close, "corner", kw)?.0;
+                let corner = self.require(place, close, "corner", kw)?;
                 let (edge1, _) = self.require(v[1], close, "edge1", kw)?;
                 let (edge2, toks) = self.require(v[2], close, "edge2", kw)?;
                 if edge1.as_dvec3().cross(edge2.as_dvec3()).length_squared() == 0.0 {
@@ -385,7 +391,7 @@ impl<'a> Parser<'a> {
                 })
             }
             "disk" => {
-                let center = self.require(v[0], close, "center", kw)?.0;
+                let center = self.require(place, close, "center", kw)?;
                 let (normal, toks) = self.require(v[1], close, "normal", kw)?;
                 let radius = self.require(radius, close, "radius", kw)?;
                 if normal.as_dvec3().length_squared() == 0.0 {
@@ -402,7 +408,7 @@ impl<'a> Parser<'a> {
                 })
             }
             _ => {
-                let center = self.require(v[0], close, "center", kw)?.0;
+                let center = self.require(place, close, "center", kw)?;
                 let radius = self.require(radius, close, "radius", kw)?;
                 Ok(AreaShape::Sphere { center, radius })
             }

@@ -5,8 +5,9 @@ use super::parse;
 use crate::format::ParseError;
 use crate::math::{Mat4, Vec3};
 use crate::scene::{
-    Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc, TextureKind,
+    AreaShape, Background, Camera, Light, Material, Node, Phong, Scene, ShapeDesc, TextureKind,
 };
+use glam::DVec3;
 use std::path::Path;
 
 const CAMERA: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n";
@@ -227,6 +228,64 @@ fn texture_must_refer_to_earlier_materials() {
     assert!(e.expected.contains("earlier"), "{e}");
 }
 
+/// Positions keep every digit the file gives (read as f64): at 10⁵ an f32
+/// would round 0.3 to 0.3046875; directions and radii stay f32.
+#[test]
+fn positions_are_read_in_double_precision() {
+    let s = scene(&format!(
+        "{CAMERA}Lights {{ numLights 4\n\
+         PointLight {{ position 100000.3 -2.1 7 color 1 1 1 }}\n\
+         AreaLight {{ quad {{ corner 100000.3 1 2 edge1 1 0 0 edge2 0 0 1 }} color 1 1 1 power 1 }}\n\
+         AreaLight {{ disk {{ center 1 100000.3 2 normal 0 1 0 radius 0.5 }} color 1 1 1 power 1 }}\n\
+         AreaLight {{ sphere {{ center 1 2 100000.3 radius 0.1 }} color 1 1 1 power 1 }} }}\n\
+         Group {{ numObjects 3\n Sphere {{ center 100000.3 0 0 radius 0.1 }}\n\
+         Plane {{ normal 0 1 0 offset 100000.3 }}\n\
+         Triangle {{ vertex0 100000.3 0 0 vertex1 0 100000.3 0 vertex2 0 0 100000.3 }} }}"
+    ));
+    let x = 100000.3;
+    assert_ne!(x as f32 as f64, x);
+    assert!(
+        matches!(s.lights[0], Light::Point { position, .. } if position == DVec3::new(x, -2.1, 7.0))
+    );
+    let centres: Vec<DVec3> = (s.lights[1..].iter())
+        .map(|l| match l {
+            Light::Area { shape, .. } => match *shape {
+                AreaShape::Quad { corner, .. } => corner,
+                AreaShape::Disk { center, .. } | AreaShape::Sphere { center, .. } => center,
+            },
+            l => panic!("{l:?}"),
+        })
+        .collect();
+    assert_eq!(
+        centres,
+        [
+            DVec3::new(x, 1.0, 2.0),
+            DVec3::new(1.0, x, 2.0),
+            DVec3::new(1.0, 2.0, x)
+        ]
+    );
+    let mut l = Vec::new();
+    leaves(&s.root, &mut l);
+    assert_eq!(
+        l[0].0,
+        ShapeDesc::Sphere {
+            center: DVec3::new(x, 0.0, 0.0),
+            radius: 0.1
+        }
+    );
+    assert_eq!(
+        l[1].0,
+        ShapeDesc::Plane {
+            normal: Vec3::Y,
+            offset: x
+        }
+    );
+    assert_eq!(
+        l[2].0,
+        ShapeDesc::Triangle([DVec3::X * x, DVec3::Y * x, DVec3::Z * x])
+    );
+}
+
 #[test]
 fn objects() {
     let s = scene(&format!(
@@ -240,7 +299,7 @@ fn objects() {
     assert_eq!(
         l[0].0,
         ShapeDesc::Sphere {
-            center: Vec3::new(1.0, 2.0, 3.0),
+            center: Vec3::new(1.0, 2.0, 3.0).as_dvec3(),
             radius: 2.0
         }
     );
@@ -251,7 +310,10 @@ fn objects() {
             offset: -1.0
         }
     );
-    assert_eq!(l[2].0, ShapeDesc::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]));
+    assert_eq!(
+        l[2].0,
+        ShapeDesc::Triangle([DVec3::ZERO, DVec3::X, DVec3::Y])
+    );
     let Node::Group(top) = &s.root else { panic!() };
     assert!(
         matches!(&top[3], Node::Transform { matrix, child } if *matrix == Mat4::from_translation(Vec3::X).as_dmat4() && **child == Node::Group(vec![]))

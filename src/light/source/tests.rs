@@ -17,7 +17,7 @@ fn grid(k: usize) -> impl Iterator<Item = Vec2> {
     (0..k).flat_map(move |i| (0..k).map(move |j| Vec2::new(at(i), at(j))))
 }
 
-fn area(shape: AreaShape) -> Light {
+fn area(shape: RenderAreaShape) -> RenderLight {
     Light::Area {
         shape,
         color: Vec3::new(1.0, 0.8, 0.5),
@@ -25,7 +25,7 @@ fn area(shape: AreaShape) -> Light {
     }
 }
 
-fn scene_area_lights() -> Vec<Light> {
+fn scene_area_lights() -> Vec<RenderLight> {
     vec![
         area(AreaShape::Quad {
             corner: Vec3::new(-0.5, 2.0, -0.25),
@@ -80,7 +80,7 @@ fn delta_lights_match_incident_bit_for_bit() {
         Vec3::ZERO,
         Vec3::new(f32::NAN, 1.0, 0.0),
     ];
-    let mut lights: Vec<Light> = (dirs.iter())
+    let mut lights: Vec<RenderLight> = (dirs.iter())
         .map(|&direction| Light::Directional {
             direction,
             color: Vec3::new(0.5, 1.0, 2.0),
