@@ -547,6 +547,9 @@ impl Integrator for PathTracer {
             let Some(h) = hit else {
                 // The uniform environment: found only by BSDF sampling.
                 radiance += beta * background;
+                if background != Vec3::ZERO {
+                    observer.light(1.0, beta * background);
+                }
                 break;
             };
             if depth == 0 {
@@ -568,6 +571,7 @@ impl Integrator for PathTracer {
                     }
                 };
                 radiance += beta * le * w;
+                observer.light(w, beta * le * w);
             }
             if depth >= s.max_bounces {
                 break;
@@ -587,9 +591,8 @@ impl Integrator for PathTracer {
                 {
                     let f = bsdf.f(wo, ls.wi);
                     let cos = ls.wi.dot(h.normal).abs();
-                    if f != Vec3::ZERO
-                        && cos > 0.0
-                        && !occluded(
+                    if f != Vec3::ZERO && cos > 0.0 {
+                        let blocked = occluded(
                             world,
                             &mut spawn,
                             ls.target,
@@ -597,20 +600,28 @@ impl Integrator for PathTracer {
                             depth + 1,
                             counters,
                             observer,
-                        )
-                    {
-                        let contribution = if ls.pdf > 0.0 {
-                            let w = match s.strategy {
-                                Strategy::Mis => power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)),
-                                _ => 1.0,
-                            };
-                            f * cos * ls.radiance * (w / ls.pdf)
-                        } else {
-                            // Delta lights and AreaLights: `radiance` is
-                            // already divided by the density of the point.
-                            f * cos * ls.radiance / choose
+                        );
+                        // The MIS weight; delta lights and AreaLights have
+                        // `radiance` already divided by the density of the
+                        // point, and only light sampling finds them.
+                        let w = match s.strategy {
+                            Strategy::Mis if ls.pdf > 0.0 => {
+                                power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi))
+                            }
+                            _ => 1.0,
                         };
-                        radiance += beta * contribution;
+                        if blocked {
+                            observer.light(w, Vec3::ZERO);
+                        } else {
+                            let contribution = beta
+                                * if ls.pdf > 0.0 {
+                                    f * cos * ls.radiance * (w / ls.pdf)
+                                } else {
+                                    f * cos * ls.radiance / choose
+                                };
+                            radiance += contribution;
+                            observer.light(w, contribution);
+                        }
                     }
                 }
             }
