@@ -2,8 +2,9 @@
 //! emitting room with closed forms, agreement with Mitsuba 3 on the scenes
 //! of `scenes/` (references in `tests/mitsuba/`, made by
 //! `scripts/mitsuba_references.sh`), deliberately wrong twins that the
-//! same check rejects, the strategies of MIS, convergence, and determinism
-//! across threads.
+//! same check rejects, the strategies of MIS, area lights against emitting
+//! triangles, convergence, determinism across threads, and every other
+//! feature of a render under the path tracer.
 
 use crate::common::*;
 use glint::integrator::{IntegratorKind, LightChoice, PathSettings, Strategy};
