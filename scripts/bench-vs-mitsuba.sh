@@ -2,7 +2,7 @@
 # Whole render of scene6_07 (40k-triangle bunny on a plane, two directional lights, shadows):
 # glint against Mitsuba 3's scalar_rgb direct integrator, in one run, as ratios.
 # usage: scripts/bench-vs-mitsuba.sh [VENV] [REPS] [SIZE]
-#        scripts/bench-vs-mitsuba.sh path [VENV] [SPP]
+#        scripts/bench-vs-mitsuba.sh path [VENV] [SPP] [REPS]
 #   path: the path tracers at equal wall time on 2 threads, on the scenes with Mitsuba references
 #         (tests/mitsuba/NAME_ref.exr, 128x128, 1024 spp): glint renders SPP samples per pixel
 #         (default 64), Mitsuba 3's scalar_rgb path tracer (scripts/mitsuba_twin.py) as many as fit
@@ -10,7 +10,11 @@
 #         samples/s and rays/s (Mitsuba reports no ray count), and the RMSE ratio; then the same
 #         ratio with the reference's own noise taken out of both RMSEs (its variance, estimated
 #         from the two 64-sample Mitsuba renders NAME_seed1/2 scaled by 64/1024, subtracted from
-#         both squared RMSEs): the ratio against a converged image.
+#         both squared RMSEs): the ratio against a converged image. Times are medians of REPS runs
+#         (default 3; each renderer's images are the same in every run: fixed seeds). Load on the
+#         machine can still make the two times differ, so the last two columns scale Mitsuba's RMSE
+#         to glint's time first (RMSE ~ 1/sqrt(time) at a fixed sampler: x sqrt(Mitsuba s / glint s)):
+#         the ratio at exactly equal time, without and with the reference's noise taken out.
 #   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
 #         `pip install mitsuba` on first use)
 #   REPS  repetitions (default 3): medians are reported
@@ -22,6 +26,8 @@ cd "$(dirname "$0")/.."
 if [ "${1:-}" = path ]; then
   venv=${2:-target/mitsuba-venv}
   spp=${3:-64}
+  reps=${4:-3}
+  median() { python3 -c "import statistics, sys; print(statistics.median(map(float, sys.argv[1:])))" "$@"; }
   if ! [ -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
     "$venv/bin/pip" install --quiet mitsuba
@@ -29,16 +35,22 @@ if [ "${1:-}" = path ]; then
   cargo build --release --quiet --bin glint
   tmp=$(mktemp -d)
   echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-  echo "| scene | glint spp | glint s | glint samples/s | glint rays/s | glint RMSE | Mitsuba spp | Mitsuba s | Mitsuba samples/s | Mitsuba RMSE | RMSE glint/Mitsuba | reference noise | same, noise removed |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| scene | glint spp | glint s | glint samples/s | glint rays/s | glint RMSE | Mitsuba spp | Mitsuba s | Mitsuba samples/s | Mitsuba RMSE | RMSE glint/Mitsuba | reference noise | same, noise removed | at equal time | same, noise removed |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
   for name in cornell_box cornell_caustics mesh_sphere_light; do
-    ./target/release/glint render "scenes/$name.txt" -o "$tmp/g.exr" --size 128 128 --integrator path \
-      --spp "$spp" --threads 2 --quiet --stats-json "$tmp/g.json" >/dev/null
     twin() { "$venv/bin/python" scripts/mitsuba_twin.py "scenes/$name.txt" "$tmp/m.exr" --size 128 --threads 2 --seed 7 --spp "$1" | sed -E 's/.*: ([0-9.]+) s/\1/'; }
-    t16=$(twin 16)
-    tg=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['render_ms']/1e3)" "$tmp/g.json")
+    tgs=(); t16s=(); tms=()
+    for _ in $(seq 1 "$reps"); do
+      ./target/release/glint render "scenes/$name.txt" -o "$tmp/g.exr" --size 128 128 --integrator path \
+        --spp "$spp" --threads 2 --quiet --stats-json "$tmp/g.json" >/dev/null
+      tgs+=("$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['render_ms']/1e3)" "$tmp/g.json")")
+      t16s+=("$(twin 16)")
+    done
+    tg=$(median "${tgs[@]}")
+    t16=$(median "${t16s[@]}")
     mspp=$(python3 -c "import sys; print(max(1, round(16 * float(sys.argv[1]) / float(sys.argv[2]))))" "$tg" "$t16")
-    tm=$(twin "$mspp")
+    for _ in $(seq 1 "$reps"); do tms+=("$(twin "$mspp")"); done
+    tm=$(median "${tms[@]}")
     "$venv/bin/python" - "$name" "$tmp" "$spp" "$tg" "$mspp" "$tm" <<'PY'
 import json, sys
 import numpy as np
@@ -55,9 +67,12 @@ tg, tm = float(tg), float(tm)
 s1, s2 = read(f"tests/mitsuba/{name}_seed1.exr"), read(f"tests/mitsuba/{name}_seed2.exr")
 ref_var = float(((s1 - s2) ** 2).mean() / 2) * 64 / 1024
 clean = lambda e: max(e * e - ref_var, 0.0) ** 0.5
+# Mitsuba's RMSE had it run exactly glint's time (its variance scales as 1/time).
+scale = (tm / tg) ** 0.5
 print(f"| {name} | {spp} | {tg:.2f} | {px * int(spp) / tg:,.0f} | {stats['rays_total'] / tg:,.0f} | {g:.4f} "
       f"| {mspp} | {tm:.2f} | {px * int(mspp) / tm:,.0f} | {m:.4f} | {g / m:.2f} "
-      f"| {ref_var ** 0.5:.4f} | {clean(g) / clean(m):.2f} |")
+      f"| {ref_var ** 0.5:.4f} | {clean(g) / clean(m):.2f} "
+      f"| {g / (m * scale):.2f} | {clean(g) / (clean(m) * scale):.2f} |")
 PY
   done
   echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -204,3 +204,140 @@ fn bad_pixel_and_format_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains(".json"));
 }
+
+/// `glint raytree --integrator path`: the path of sample `k` of a pixel is
+/// the one `glint render --integrator path` traced with the same `--spp`,
+/// `--sampler` and `--seed` (the mean of the pixel's recorded paths is the
+/// rendered pixel), its vertices chain (each scattered ray leaves where
+/// the previous one ended), and the light it carries is itemised: every
+/// shadow ray and every ray that met an emitter or the environment has its
+/// MIS weight in [0, 1] and its contribution, blocked shadow rays add
+/// nothing, and the contributions add up to the path's colour. Across the
+/// paths, emitters hit by a scattered ray take weights strictly between 0
+/// and 1 (both strategies could find them), as do light samples.
+#[test]
+fn path_tree_is_a_path_of_the_render_with_its_mis_weights() {
+    let dir = scratch("raytree-path");
+    let scene = own_scene("cornell_caustics.txt")
+        .to_string_lossy()
+        .into_owned();
+    let sampling = ["--spp", "4", "--sampler", "random", "--seed", "3"];
+    let size = ["--size", "32", "32"];
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "render",
+            &scene,
+            "-o",
+            "r.exr",
+            "--integrator",
+            "path",
+            "--quiet",
+        ])
+        .args(size)
+        .args(sampling)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let image = glint::output::read_exr_window(&dir.join("r.exr")).unwrap();
+    let (mut mixed_emitter, mut mixed_light) = (0, 0);
+    for (x, y) in [(16, 28), (8, 20), (24, 12), (16, 4), (20, 24), (10, 26)] {
+        let mut sum = [0f64; 3];
+        for k in 0..4 {
+            let (px, k_) = (format!("{x} {y}"), k.to_string());
+            let mut px = px.split(' ');
+            let args = [
+                &[scene.as_str(), "-o", "t.json", "--integrator", "path"][..],
+                &["--pixel", px.next().unwrap(), px.next().unwrap()],
+                &size,
+                &sampling,
+                &["--sample", &k_],
+            ]
+            .concat();
+            let out = raytree(&args, &dir);
+            assert!(out.status.success(), "{out:?}");
+            let t: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.join("t.json")).unwrap())
+                    .unwrap();
+            let color: Vec<f64> = (0..3).map(|c| t["color"][c].as_f64().unwrap()).collect();
+            let mut carried = [0f64; 3];
+            let mut last_end: Option<Vec<f64>> = None;
+            for r in t["rays"].as_array().unwrap() {
+                let kind = r["kind"].as_str().unwrap();
+                let xyz = |key: &str| -> Vec<f64> {
+                    (0..3).map(|c| r[key][c].as_f64().unwrap()).collect()
+                };
+                if kind != "shadow" {
+                    if let Some(end) = &last_end {
+                        let o = xyz("origin");
+                        let d: f64 = (0..3).map(|c| (o[c] - end[c]).abs()).sum();
+                        assert!(
+                            d < 1e-3,
+                            "({x}, {y}) sample {k}: {kind} ray leaves {o:?}, not {end:?}"
+                        );
+                    }
+                    last_end = r["hit"].as_bool().unwrap().then(|| xyz("end"));
+                }
+                let w = r["mis_weight"].as_f64();
+                if kind == "shadow" {
+                    assert!(w.is_some(), "a light sample without its weight: {r}");
+                }
+                let Some(w) = w else { continue };
+                assert!((0.0..=1.0).contains(&w), "{r}");
+                let c = xyz("contribution");
+                if r["occluded"].as_bool().unwrap() {
+                    assert_eq!(c, [0.0; 3], "{r}");
+                }
+                if w > 0.0 && w < 1.0 && c.iter().any(|&v| v > 0.0) {
+                    if kind == "shadow" {
+                        mixed_light += 1;
+                    } else {
+                        mixed_emitter += 1;
+                    }
+                }
+                for ch in 0..3 {
+                    carried[ch] += c[ch];
+                    assert!(c[ch] >= 0.0, "{r}");
+                }
+            }
+            for ch in 0..3 {
+                assert!(
+                    (carried[ch] - color[ch]).abs() <= 1e-5 * color[ch].max(1.0),
+                    "({x}, {y}) sample {k}: contributions {carried:?}, colour {color:?}"
+                );
+                sum[ch] += color[ch] / 4.0;
+            }
+        }
+        let p = image.pixels[y * 32 + x];
+        for ch in 0..3 {
+            let want = p[ch] as f64;
+            assert!(
+                (sum[ch] - want).abs() <= 1e-5 * want.max(1.0),
+                "({x}, {y}): paths {sum:?}, rendered {p}"
+            );
+        }
+    }
+    assert!(
+        mixed_emitter > 0 && mixed_light > 0,
+        "{mixed_emitter} emitters hit and {mixed_light} light samples with 0 < w < 1"
+    );
+    // Path flags without the path tracer, and a sample outside --spp.
+    for (args, want) in [
+        (&["--seed", "3"][..], "need --integrator path"),
+        (
+            &["--integrator", "path", "--spp", "4", "--sample", "4"][..],
+            "not one of the 4 samples",
+        ),
+    ] {
+        let all = [
+            &[scene.as_str(), "-o", "t.json", "--pixel", "1", "1"][..],
+            &size,
+            args,
+        ]
+        .concat();
+        let out = raytree(&all, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+}

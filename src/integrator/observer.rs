@@ -39,6 +39,16 @@ pub trait RayObserver {
         let t_end = if blocked { f32::NAN } else { distance };
         self.ray(RayKind::Shadow, ray, t_end, depth, 0.0, None);
     }
+
+    /// The ray reported last carried light to the path: a light sample's
+    /// shadow ray, or a scattered ray that hit an emitter. `weight` is its
+    /// multiple-importance-sampling weight (1 where only one strategy can
+    /// find that light) and `contribution` the radiance it added to the
+    /// pixel (zero for a blocked shadow ray). Only the path tracer reports
+    /// it.
+    fn light(&mut self, weight: f32, contribution: Vec3) {
+        let _ = (weight, contribution);
+    }
 }
 
 /// Observes nothing.
@@ -50,6 +60,9 @@ impl RayObserver for NoObserver {
 
     #[inline(always)]
     fn shadow(&mut self, _: &Ray, _: f32, _: bool, _: u32) {}
+
+    #[inline(always)]
+    fn light(&mut self, _: f32, _: Vec3) {}
 }
 
 /// One recorded ray.
@@ -70,6 +83,10 @@ pub struct RecordedRay {
     pub weight: f32,
     /// Surface normal at the end point, if it hit.
     pub normal: Option<Vec3>,
+    /// For a ray that carried light to the path (the path tracer's light
+    /// samples and emitters hit): its MIS weight and the radiance it added
+    /// ([`RayObserver::light`]).
+    pub light: Option<(f32, Vec3)>,
 }
 
 /// Records every ray, in the order traced.
@@ -97,6 +114,7 @@ impl RayObserver for RayRecorder {
             depth,
             weight,
             normal,
+            light: None,
         });
     }
 
@@ -109,7 +127,14 @@ impl RayObserver for RayRecorder {
             depth,
             weight: 0.0,
             normal: None,
+            light: None,
         });
+    }
+
+    fn light(&mut self, weight: f32, contribution: Vec3) {
+        if let Some(r) = self.rays.last_mut() {
+            r.light = Some((weight, contribution));
+        }
     }
 }
 

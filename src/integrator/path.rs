@@ -14,12 +14,15 @@
 //!   sampling cannot find their direction), weight 1;
 //! - emitters that cannot be sampled (emission on a plane, a transformed or
 //!   moving shape) and the background's uniform environment only through
-//!   BSDF sampling, weight 1; the scene's `AreaLight`s are not surfaces a
-//!   ray can hit, so they are found only by light sampling, weight 1.
+//!   BSDF sampling, weight 1.
 //!
 //! Emitters that can be sampled are the triangles (single or of meshes) and
 //! spheres whose material has an `emittedColor`: a triangle by area, a
-//! sphere by the cone of directions it fills as seen from the point.
+//! sphere by the cone of directions it fills as seen from the point; and
+//! the scene's `AreaLight`s (quad, disk, sphere), which are not in the
+//! aggregate: a ray crossing one before its hit
+//! (`World::intersect_emitters`) adds its emission, weighted by MIS, and
+//! goes on, since they block no ray (shadow rays pass through them too).
 //!
 //! **Sample dimensions.** Every vertex takes the same [`DIMS_PER_VERTEX`]
 //! dimensions of the pixel's [`SampleStream`] in the same order, used or
@@ -38,7 +41,7 @@
 
 use super::{count_ray, Integrator, RayKind, RayObserver};
 use crate::bsdf::Bsdf;
-use crate::light::{incident, sample_light};
+use crate::light::{incident, LightPoint};
 use crate::material::{eval, TextureSpace};
 
 use crate::math::warp::uniform_triangle;
@@ -140,9 +143,9 @@ pub struct PathTracer {
 }
 
 /// A light sample: direction, radiance arriving divided by nothing, the
-/// density per unit solid angle of the direction (0 for delta lights and
-/// the scene's `AreaLight`s, whose `radiance` is already divided by it),
-/// and where the shadow ray goes.
+/// density per unit solid angle of the direction including the choice of
+/// the light (0 for delta lights, whose `radiance` is what arrives), and
+/// where the shadow ray goes.
 struct LightSample {
     wi: Vec3,
     radiance: Vec3,
@@ -415,11 +418,30 @@ impl PathTracer {
                 choose,
             ));
         }
-        let light = &world.lights()[k - self.emitters.len()];
+        let index = k - self.emitters.len();
+        let light = &world.lights()[index];
         let (inc, target) = match light {
             Light::Area { .. } => {
-                let inc = sample_light(light, from, u);
-                (inc, Target::Surface(inc.at?))
+                // Sampled as a surface that BSDF sampling can also hit
+                // (`World::intersect_emitters`): the density per solid
+                // angle, for MIS.
+                let ls = world.light_sources().get(index)?.sample_li(from, u)?;
+                let (LightPoint::Surface(at), true) = (ls.to, ls.pdf > 0.0 && ls.pdf.is_finite())
+                else {
+                    return None;
+                };
+                if ls.li == Vec3::ZERO {
+                    return None;
+                }
+                return Some((
+                    LightSample {
+                        wi: ls.wi,
+                        radiance: ls.li,
+                        pdf: choose * ls.pdf,
+                        target: Target::Surface(at),
+                    },
+                    choose,
+                ));
             }
             Light::Point { position, .. } => (incident(light, from), Target::Point(*position)),
             Light::Directional { .. } => {
@@ -544,9 +566,37 @@ impl Integrator for PathTracer {
                 beta.max_element(),
                 hit.map(|h| h.normal),
             );
+            // The scene's area lights: emitting surfaces that do not block
+            // (shadow rays pass through them too), crossed before the hit.
+            let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
+            let mut t_from = ray_tmin;
+            while let Some((i, eh)) = world.intersect_emitters(&ray, t_from, t_hit) {
+                t_from = eh.t;
+                if eh.le == Vec3::ZERO {
+                    continue;
+                }
+                let w = match prev {
+                    None | Some((_, _, true)) => 1.0,
+                    Some((p, pdf_bsdf, false)) => {
+                        let pdf_light = self.light_probability(self.emitters.len() + i as usize)
+                            * world.light_sources()[i as usize].pdf_li(p, ray.dir.normalize());
+                        match s.strategy {
+                            _ if pdf_light <= 0.0 => 1.0,
+                            Strategy::Mis => power_heuristic(pdf_bsdf, pdf_light),
+                            Strategy::Light => 0.0,
+                            Strategy::Bsdf => 1.0,
+                        }
+                    }
+                };
+                radiance += beta * eh.le * w;
+                observer.light(w, beta * eh.le * w);
+            }
             let Some(h) = hit else {
                 // The uniform environment: found only by BSDF sampling.
                 radiance += beta * background;
+                if background != Vec3::ZERO {
+                    observer.light(1.0, beta * background);
+                }
                 break;
             };
             if depth == 0 {
@@ -568,6 +618,7 @@ impl Integrator for PathTracer {
                     }
                 };
                 radiance += beta * le * w;
+                observer.light(w, beta * le * w);
             }
             if depth >= s.max_bounces {
                 break;
@@ -587,9 +638,8 @@ impl Integrator for PathTracer {
                 {
                     let f = bsdf.f(wo, ls.wi);
                     let cos = ls.wi.dot(h.normal).abs();
-                    if f != Vec3::ZERO
-                        && cos > 0.0
-                        && !occluded(
+                    if f != Vec3::ZERO && cos > 0.0 {
+                        let blocked = occluded(
                             world,
                             &mut spawn,
                             ls.target,
@@ -597,20 +647,27 @@ impl Integrator for PathTracer {
                             depth + 1,
                             counters,
                             observer,
-                        )
-                    {
-                        let contribution = if ls.pdf > 0.0 {
-                            let w = match s.strategy {
-                                Strategy::Mis => power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)),
-                                _ => 1.0,
-                            };
-                            f * cos * ls.radiance * (w / ls.pdf)
-                        } else {
-                            // Delta lights and AreaLights: `radiance` is
-                            // already divided by the density of the point.
-                            f * cos * ls.radiance / choose
+                        );
+                        // The MIS weight; only light sampling finds delta
+                        // lights, whose `radiance` is what arrives.
+                        let w = match s.strategy {
+                            Strategy::Mis if ls.pdf > 0.0 => {
+                                power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi))
+                            }
+                            _ => 1.0,
                         };
-                        radiance += beta * contribution;
+                        if blocked {
+                            observer.light(w, Vec3::ZERO);
+                        } else {
+                            let contribution = beta
+                                * if ls.pdf > 0.0 {
+                                    f * cos * ls.radiance * (w / ls.pdf)
+                                } else {
+                                    f * cos * ls.radiance / choose
+                                };
+                            radiance += contribution;
+                            observer.light(w, contribution);
+                        }
                     }
                 }
             }

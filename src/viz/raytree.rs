@@ -67,6 +67,42 @@ pub fn record<I: Integrator>(
     }
 }
 
+/// Traces sample `index` of pixel `(x, y)` (y from the top) of a `w`×`h`
+/// image exactly as a render with `sampler` traces it (the pixel position,
+/// lens point and every later decision from that sample's stream),
+/// recording every ray: for the path tracer, one of the paths the render
+/// averages, with its light samples and their MIS weights. Its colour is
+/// that sample's value.
+pub fn record_sample<I: Integrator>(
+    world: &World,
+    camera: &CameraModel,
+    integrator: &I,
+    (w, h): (u32, u32),
+    (x, y): (u32, u32),
+    sampler: &Sampler,
+    index: u32,
+) -> RayTree {
+    let (i, j) = (x.min(w - 1), h - 1 - y.min(h - 1));
+    let mut stream = sampler.stream((i, j), index);
+    let offset = stream.next_2d();
+    let ray = camera.sample_ray(screen_point(i, j, offset, w, h), &mut stream);
+    let mut rec = RayRecorder::default();
+    let (color, _) = integrator.li(
+        world,
+        &ray,
+        camera.tmin(),
+        &mut stream,
+        &mut Counters::default(),
+        &mut rec,
+    );
+    RayTree {
+        pixel: (x, y),
+        size: (w, h),
+        rays: rec.rays,
+        color,
+    }
+}
+
 /// The course's name and drawing colour of a ray kind.
 pub fn kind_style(kind: RayKind) -> (&'static str, Vec3) {
     match kind {
@@ -109,8 +145,10 @@ impl RayTree {
     }
 
     /// The tree as JSON: the pixel, counts by kind and every ray with its
-    /// kind, depth, weight, origin, direction, end, hit normal and, for
-    /// shadow rays, whether it was blocked.
+    /// kind, depth, weight, origin, direction, end, hit normal, for shadow
+    /// rays whether it was blocked and, for the rays that carried light to
+    /// a path (the path tracer's light samples and emitters hit), the MIS
+    /// weight and the radiance added (`null` for the others).
     pub fn to_json(&self) -> serde_json::Value {
         let v = |p: Vec3| serde_json::json!([p.x, p.y, p.z]);
         let rays: Vec<_> = self
@@ -129,6 +167,8 @@ impl RayTree {
                     "hit": hit,
                     "normal": r.normal.map(v),
                     "occluded": r.occluded,
+                    "mis_weight": r.light.map(|l| l.0),
+                    "contribution": r.light.map(|l| v(l.1)),
                 })
             })
             .collect();

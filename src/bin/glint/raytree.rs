@@ -1,10 +1,14 @@
-//! `glint raytree SCENE --pixel X Y -o FILE`: every ray one pixel spawns.
+//! `glint raytree SCENE --pixel X Y -o FILE`: every ray one pixel spawns
+//! (with `--integrator path`: one path of the path tracer).
 
 use crate::args::{ImageArgs, SceneArgs, ShadingArgs};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use glint::app::usage;
+use glint::integrator::{IntegratorKind, PathSettings, PathTracer};
 use glint::job::{FlagNames, JobError};
 use glint::render::{CameraModel, PixelOffset};
+use glint::sampler::{Sampler, SamplerKind};
 use glint::viz::raytree;
 use glint::world::{BuildOptions, World};
 
@@ -23,6 +27,21 @@ pub struct RaytreeArgs {
     image: ImageArgs,
     #[command(flatten)]
     shading: ShadingArgs,
+    /// Whose rays: whitted (the ray tree the shaded image traces through the pixel centre) or path (one path of the path tracer, with its light samples and their MIS weights; see --sample).
+    #[arg(long, default_value = "whitted", value_parser = PossibleValuesParser::new(["whitted", "path"]).try_map(|s| s.parse::<IntegratorKind>()))]
+    integrator: IntegratorKind,
+    /// With --integrator path: which sample of the pixel (0-based, below --spp) to trace, as `glint render --integrator path` with the same --spp, --sampler and --seed traces it.
+    #[arg(long, default_value_t = 0)]
+    sample: u32,
+    /// With --integrator path: samples per pixel of the render whose path is shown (1 to 4096).
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// With --integrator path: the sampler of that render (default sobol, as the path tracer renders).
+    #[arg(long)]
+    sampler: Option<SamplerKind>,
+    /// With --integrator path: the seed of that render.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
 }
 
 /// Runs `glint raytree`.
@@ -49,10 +68,29 @@ pub fn run(a: RaytreeArgs) -> Result<(), JobError> {
         glint::output::check_image(output, w, h)
             .map_err(|e| usage(format!("{e} (or .json, .obj, .ply for the tree itself)")))?;
     }
+    let path = matches!(a.integrator, IntegratorKind::Path(_));
+    if !path && (a.sample != 0 || a.spp != 1 || a.sampler.is_some() || a.seed != 0) {
+        return Err(usage(
+            "--sample, --spp, --sampler and --seed choose a path: they need --integrator path"
+                .to_string(),
+        ));
+    }
+    if !(1..=4096).contains(&a.spp) {
+        return Err(usage(format!(
+            "--spp {}: expected a sample count from 1 to 4096",
+            a.spp
+        )));
+    }
+    if a.sample >= a.spp {
+        return Err(usage(format!(
+            "--sample {} is not one of the {} samples per pixel (0 to {})",
+            a.sample,
+            a.spp,
+            a.spp - 1
+        )));
+    }
     // Issue 15: the numbers' ranges, and never overwrite an input.
-    let shading = a
-        .shading
-        .shading(glint::integrator::IntegratorKind::Whitted);
+    let shading = a.shading.shading(a.integrator);
     shading.validate(FlagNames::Glint).map_err(usage)?;
     let mut scene = glint::job::load_scene_for(&a.scene.scene, output, (w, h))?;
     if shading.smooth {
@@ -69,14 +107,27 @@ pub fn run(a: RaytreeArgs) -> Result<(), JobError> {
     let camera =
         CameraModel::of_world(&world, &scene.effects).at_time(scene.effects.lens.shutter[0]);
     let integrator = shading.whitted();
-    let tree = raytree::record(
+    let tracer = PathTracer::new(
         &world,
-        &camera,
-        &integrator,
-        (w, h),
-        (x, y),
-        PixelOffset::CENTER,
+        PathSettings {
+            max_bounces: shading.bounces,
+            texture_space: shading.texture_space,
+            ..PathSettings::default()
+        },
     );
+    let tree = if path {
+        let sampler = Sampler::new(a.sampler.unwrap_or(SamplerKind::Sobol), a.spp, a.seed);
+        raytree::record_sample(&world, &camera, &tracer, (w, h), (x, y), &sampler, a.sample)
+    } else {
+        raytree::record(
+            &world,
+            &camera,
+            &integrator,
+            (w, h),
+            (x, y),
+            PixelOffset::CENTER,
+        )
+    };
     let counts: Vec<String> = tree
         .counts()
         .iter()
@@ -91,7 +142,11 @@ pub fn run(a: RaytreeArgs) -> Result<(), JobError> {
         "obj" => glint::output::write_file(output, tree.to_obj().as_bytes())?,
         "ply" => glint::output::write_file(output, tree.to_ply().as_bytes())?,
         _ => {
-            let canvas = raytree::overlay(&world, &camera, &integrator, (w, h), &tree);
+            let canvas = if path {
+                raytree::overlay(&world, &camera, &tracer, (w, h), &tree)
+            } else {
+                raytree::overlay(&world, &camera, &integrator, (w, h), &tree)
+            };
             glint::output::write_rgb(output, w, h, &canvas.pixels)?;
         }
     }
