@@ -118,3 +118,21 @@ pub(crate) fn assert_agrees_on(
     }
     c
 }
+
+/// `n` triangles at x = 1.2^k, all of one shape across the x axis (each
+/// covers y + z ≥ 1/2 of its box): binned over the whole range, every
+/// split peels off the few largest, so the BVH over them is a chain as
+/// deep as the builder goes.
+pub(crate) fn chain(n: i32) -> Vec<Primitive> {
+    (0..n)
+        .map(|k| {
+            let x = 1.2f32.powi(k);
+            let v = |y: f32, z: f32| Vec3::new(x, y, z);
+            prim(Shape::Triangle(Triangle::new(
+                v(-0.5, 1.0),
+                v(1.0, 1.0),
+                v(1.0, -0.5),
+            )))
+        })
+        .collect()
+}
