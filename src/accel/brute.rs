@@ -1,5 +1,6 @@
-use super::{Aggregate, PrimHit};
-use crate::math::{Aabb, Ray};
+use super::mailbox::ItemTests;
+use super::{Aggregate, PrimHit, Query};
+use crate::math::Aabb;
 use crate::primitive::Primitive;
 use crate::stats::Counters;
 
@@ -20,41 +21,14 @@ impl Brute {
 }
 
 impl Aggregate for Brute {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut tmax = tmax;
-        c.intersection_tests += self.ids.len() as u64;
-        for &i in &self.ids {
-            if let Some(t) = prims[i as usize].shape.intersect(ray, tmin, tmax) {
-                tmax = t;
-                best = Some(PrimHit { t, prim: i });
-            }
-        }
-        best
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        let mut tests = ItemTests::new(q, false);
+        tests.closest(&self.ids, c);
+        tests.best()
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        for &i in &self.ids {
-            c.intersection_tests += 1;
-            if prims[i as usize].shape.intersect(ray, tmin, tmax).is_some() {
-                return true;
-            }
-        }
-        false
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        ItemTests::new(q, false).any(&self.ids, c)
     }
 
     fn bounds(&self) -> Aabb {

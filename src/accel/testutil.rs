@@ -2,7 +2,7 @@
 //! the tests' one generator, [`crate::testutil::Rng`]) and a comparison
 //! with brute force.
 
-use super::{Aggregate, Brute};
+use super::{Aggregate, Brute, Query};
 use crate::math::{Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::shape::{Shape, Sphere, Triangle};
@@ -97,8 +97,8 @@ pub(crate) fn assert_agrees_on(
     let mut c = Counters::default();
     let mut cb = Counters::default();
     for (i, (ray, tmin, tmax)) in queries.into_iter().enumerate() {
-        let want = brute.intersect(prims, &ray, tmin, tmax, &mut cb);
-        let got = accel.intersect(prims, &ray, tmin, tmax, &mut c);
+        let want = brute.intersect(Query::new(prims, &ray, tmin, tmax), &mut cb);
+        let got = accel.intersect(Query::new(prims, &ray, tmin, tmax), &mut c);
         match (want, got) {
             (None, None) => {}
             (Some(w), Some(g)) => assert!(
@@ -111,8 +111,8 @@ pub(crate) fn assert_agrees_on(
             ),
         }
         assert_eq!(
-            brute.occluded(prims, &ray, tmin, tmax, &mut cb),
-            accel.occluded(prims, &ray, tmin, tmax, &mut c),
+            brute.occluded(Query::new(prims, &ray, tmin, tmax), &mut cb),
+            accel.occluded(Query::new(prims, &ray, tmin, tmax), &mut c),
             "ray {i}"
         );
     }

@@ -17,8 +17,8 @@ mod traverse;
 
 pub use traverse::NodeVisit;
 
-use super::{Aggregate, PrimHit, Split};
-use crate::math::{Aabb, Ray};
+use super::{Aggregate, PrimHit, Query, Split};
+use crate::math::Aabb;
 use crate::primitive::Primitive;
 use crate::stats::Counters;
 
@@ -79,14 +79,11 @@ impl Bvh {
     /// ([`Aggregate::intersect`] passes a visitor that does nothing).
     pub fn intersect_visiting(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
         visit: impl FnMut(NodeVisit),
     ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c, visit)
+        traverse::closest(self, q, c, visit)
     }
 
     /// Depth of the deepest leaf (a lone root is 0).
@@ -108,26 +105,12 @@ impl Bvh {
 }
 
 impl Aggregate for Bvh {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c, |_| {})
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        traverse::closest(self, q, c, |_| {})
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        traverse::any(self, prims, ray, tmin, tmax, c)
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        traverse::any(self, q, c)
     }
 
     fn bounds(&self) -> Aabb {
@@ -147,7 +130,7 @@ impl Aggregate for Bvh {
 mod tests {
     use super::*;
     use crate::accel::testutil::{assert_agrees, soup, sphere};
-    use crate::math::Vec3;
+    use crate::math::{Ray, Vec3};
 
     fn all(prims: &[Primitive]) -> Vec<u32> {
         (0..prims.len() as u32).collect()
@@ -181,7 +164,9 @@ mod tests {
         for (o, d, first) in [(-5.0, 1.0, 0), (60.0, -1.0, 15)] {
             let r = Ray::new(Vec3::X * o, Vec3::X * d);
             let mut c = Counters::default();
-            let h = b.intersect(&prims, &r, 0.0, f32::INFINITY, &mut c).unwrap();
+            let h = b
+                .intersect(Query::new(&prims, &r, 0.0, f32::INFINITY), &mut c)
+                .unwrap();
             assert_eq!(h.prim, first);
             assert!(c.intersection_tests <= 2, "{c:?}");
             assert!(c.nodes_visited <= 2 * b.depth() as u64 + 1, "{c:?}");
@@ -198,9 +183,9 @@ mod tests {
         // the 2nd and 3rd leaf and must stop inside the 3rd.
         let r = Ray::new(Vec3::new(22.5, 0.0, 0.0), Vec3::X);
         let mut c = Counters::default();
-        assert!(b.occluded(&prims, &r, 0.0, f32::INFINITY, &mut c));
+        assert!(b.occluded(Query::new(&prims, &r, 0.0, f32::INFINITY), &mut c));
         assert!(c.intersection_tests <= MAX_LEAF as u64, "{c:?}");
-        assert!(!b.occluded(&prims, &r, 0.0, 0.5, &mut c));
+        assert!(!b.occluded(Query::new(&prims, &r, 0.0, 0.5), &mut c));
     }
 
     #[test]
@@ -218,8 +203,10 @@ mod tests {
         let b = Bvh::new(&[], vec![], Split::Sah);
         let r = Ray::new(Vec3::ZERO, Vec3::X);
         let mut c = Counters::default();
-        assert!(b.intersect(&[], &r, 0.0, f32::INFINITY, &mut c).is_none());
-        assert!(!b.occluded(&[], &r, 0.0, f32::INFINITY, &mut c));
+        assert!(b
+            .intersect(Query::new(&[], &r, 0.0, f32::INFINITY), &mut c)
+            .is_none());
+        assert!(!b.occluded(Query::new(&[], &r, 0.0, f32::INFINITY), &mut c));
         assert_eq!(b.depth(), 0);
     }
 }

@@ -48,7 +48,7 @@ pub use traverse::{Fallback, TrianglesOnly};
 use dispatch::{AnyHit, AnyHits, ClosestHit, ClosestHits};
 use traverse::Tree;
 
-use super::{Aggregate, PrimHit};
+use super::{Aggregate, PrimHit, Query};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::shape::{is_degenerate_triangle, Shape};
@@ -323,51 +323,25 @@ impl Bvh8 {
 }
 
 impl Aggregate for Bvh8 {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        self.closest(prims, ray, tmin, tmax, c)
-            .map(|(t, prim)| PrimHit { t, prim })
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        self.intersect_barycentric(q, c).map(|(h, _)| h)
     }
 
     fn intersect_barycentric(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
     ) -> Option<(PrimHit, Option<[f32; 3]>)> {
-        self.closest_hit(prims, ray, tmin, tmax, c)
+        self.closest_hit(q.prims, q.ray, q.tmin, q.tmax, c)
             .map(|h| (PrimHit { t: h.t, prim: h.id }, h.bary))
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        self.any(prims, ray, tmin, tmax, c)
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        self.occluded_except(q, NO_ITEM, c)
     }
 
-    fn occluded_except(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        except: u32,
-        c: &mut Counters,
-    ) -> bool {
-        self.any_except(prims, ray, tmin, tmax, except, c)
+    fn occluded_except(&self, q: Query, except: u32, c: &mut Counters) -> bool {
+        self.any_except(q.prims, q.ray, q.tmin, q.tmax, except, c)
     }
 
     fn memory_bytes(&self) -> usize {

@@ -136,7 +136,7 @@ fn camera_tiles_and_shadow_rays_agree_on_a_terrain() {
 #[test]
 fn ties_go_to_the_smallest_id_in_every_walk() {
     use crate::accel::testutil::prim;
-    use crate::accel::{Aggregate, Brute};
+    use crate::accel::{Aggregate, Brute, Query};
     use crate::shape::{Shape, Triangle};
     let mut prims = soup(12, 2000);
     let t = Triangle::new(
@@ -174,7 +174,7 @@ fn ties_go_to_the_smallest_id_in_every_walk() {
     let (mut tris, mut spheres) = (0, 0);
     for q in packets.iter().flatten() {
         let single = b.closest(&prims[..], &q.ray, q.tmin, q.tmax, &mut NoStats);
-        let want = brute.intersect(&prims, &q.ray, q.tmin, q.tmax, &mut c);
+        let want = brute.intersect(Query::new(&prims, &q.ray, q.tmin, q.tmax), &mut c);
         assert_eq!(single, want.map(|h| (h.t, h.prim)), "{q:?}");
         match single {
             Some((_, id)) if id == copies[0] as u32 => tris += 1,

@@ -40,12 +40,12 @@ fn a_sphere_that_is_primitive_0_blocks_and_is_hit() {
     assert_eq!(b.tris.len(), 1);
     let mut c = Counters::default();
     let ray = Ray::new(Vec3::new(-5.0, 0.1, 0.2), Vec3::X);
-    let hit = b.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+    let hit = b.intersect(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c);
     assert_eq!(hit.map(|h| h.prim), Some(0));
     // The sphere is met at t of about 4.5, the triangles at 8 and 9:
     // up to 6 only the sphere can block.
-    assert!(b.occluded(&prims, &ray, 0.0, 6.0, &mut c));
-    assert!(!b.occluded(&prims, &ray, 0.0, 4.4, &mut c));
+    assert!(b.occluded(Query::new(&prims, &ray, 0.0, 6.0), &mut c));
+    assert!(!b.occluded(Query::new(&prims, &ray, 0.0, 4.4), &mut c));
 
     let mut soup = soup(8, 400);
     soup.rotate_right(100);
@@ -149,8 +149,8 @@ fn build_quality_stays_where_it_was_measured() {
             } else {
                 crate::accel::testutil::terrain_ray(&mut r)
             };
-            b.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
-            b.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+            b.intersect(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c);
+            b.occluded(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c);
         }
         let nodes = c.nodes_visited as f64 / rays as f64;
         let tests = c.intersection_tests as f64 / rays as f64;
@@ -238,8 +238,10 @@ fn empty_hits_nothing() {
     let b = Bvh8::new(&[], vec![]);
     let r = Ray::new(Vec3::ZERO, Vec3::X);
     let mut c = Counters::default();
-    assert!(b.intersect(&[], &r, 0.0, f32::INFINITY, &mut c).is_none());
-    assert!(!b.occluded(&[], &r, 0.0, f32::INFINITY, &mut c));
+    assert!(b
+        .intersect(Query::new(&[], &r, 0.0, f32::INFINITY), &mut c)
+        .is_none());
+    assert!(!b.occluded(Query::new(&[], &r, 0.0, f32::INFINITY), &mut c));
 }
 
 #[test]
@@ -250,7 +252,9 @@ fn nearest_first_visits_few_nodes() {
     let b = Bvh8::new(&prims, all(&prims));
     let r = Ray::new(Vec3::X * -5.0, Vec3::X);
     let mut c = Counters::default();
-    let h = b.intersect(&prims, &r, 0.0, f32::INFINITY, &mut c).unwrap();
+    let h = b
+        .intersect(Query::new(&prims, &r, 0.0, f32::INFINITY), &mut c)
+        .unwrap();
     assert_eq!(h.prim, 0);
     // Depth is about log8(4096 / 4) = 4; ordered traversal stops right after.
     assert!(c.nodes_visited <= 12, "{c:?}");
@@ -295,16 +299,13 @@ fn axis_parallel_rays_agree_and_still_cull() {
     let mut c = Counters::default();
     crate::accel::testutil::assert_agrees_on(&b, &prims, queries.iter().copied());
     for (q, _, _) in queries.iter().step_by(2) {
-        b.intersect(&prims, q, 0.0, f32::INFINITY, &mut c);
+        b.intersect(Query::new(&prims, q, 0.0, f32::INFINITY), &mut c);
     }
     let mut tilted = Counters::default();
     for (q, _, _) in queries.iter().step_by(2) {
         let d = Vec3::new(1e-3, -1.0, 1e-3);
         b.intersect(
-            &prims,
-            &Ray::new(q.origin, d),
-            0.0,
-            f32::INFINITY,
+            Query::new(&prims, &Ray::new(q.origin, d), 0.0, f32::INFINITY),
             &mut tilted,
         );
     }
@@ -412,14 +413,14 @@ fn a_deep_tree_uses_the_deep_stack() {
     let ray = Ray::new(Vec3::new(0.5, 0.0, 0.0), Vec3::X);
     let mut c = Counters::default();
     assert!(b
-        .intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c)
+        .intersect(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c)
         .is_none());
-    assert!(!b.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c));
+    assert!(!b.occluded(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c));
     // It tested every triangle, so it entered every leaf.
     assert_eq!(c.intersection_tests, 2 * 400, "{c:?}");
     let back = Ray::new(Vec3::new(0.5, 0.9, 0.9), Vec3::X);
     assert!(b
-        .intersect(&prims, &back, 0.0, f32::INFINITY, &mut c)
+        .intersect(Query::new(&prims, &back, 0.0, f32::INFINITY), &mut c)
         .is_some());
     assert_eq!(b.memory_bytes(), 256 * b.node_count() + 160 * b.tris.len());
     assert!(b.node_count() > d);

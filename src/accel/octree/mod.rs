@@ -41,7 +41,7 @@ pub enum Storage {
 }
 
 use super::mailbox::ItemTests;
-use super::{Aggregate, PrimHit};
+use super::{Aggregate, PrimHit, Query};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::stats::Counters;
@@ -170,27 +170,21 @@ impl Octree {
     /// a visitor that does nothing), which the traversal views record.
     pub fn intersect_visiting(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
         mut visit: impl FnMut(&Leaf),
     ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut t_best = tmax;
-        let mut tests = ItemTests::new(prims, ray, tmin, true);
-        let mut walk = self.walk(ray, tmin, tmax);
+        let mut tests = ItemTests::new(q, true);
+        let mut walk = self.walk(q.ray, q.tmin, q.tmax);
+        // Leaves come front to back: nothing later can beat a hit in one.
         for leaf in walk.by_ref() {
             visit(&leaf);
-            tests.closest(leaf.items, &mut best, &mut t_best, c);
-            // Leaves come front to back: nothing later can beat a hit in here.
-            if t_best <= leaf.t_exit {
+            if tests.closest_in(leaf.items, leaf.t_exit, c) {
                 break;
             }
         }
         c.nodes_visited += walk.visited;
-        best
+        tests.best()
     }
 
     /// The box the root covers (the primitives' bounds, padded).
@@ -243,28 +237,14 @@ impl Octree {
 }
 
 impl Aggregate for Octree {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        self.intersect_visiting(q, c, |_| {})
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        let mut tests = ItemTests::new(prims, ray, tmin, true);
-        let mut walk = self.walk(ray, tmin, tmax);
-        let hit = walk.by_ref().any(|leaf| tests.any(leaf.items, tmax, c));
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        let mut tests = ItemTests::new(q, true);
+        let mut walk = self.walk(q.ray, q.tmin, q.tmax);
+        let hit = walk.by_ref().any(|leaf| tests.any(leaf.items, c));
         c.nodes_visited += walk.visited;
         hit
     }
