@@ -36,17 +36,15 @@
 //! (β: the path's throughput), at most 0.95, and divides the survivors by
 //! the survival probability: unbiased.
 
-use super::{count_ray, Integrator, RayKind, RayObserver};
+use super::{Branch, Integrator, RayKind, RayObserver, Trace};
 use crate::bsdf::Bsdf;
 use crate::light::{incident, sample_light};
 use crate::material::{eval, TextureSpace};
 
 use crate::math::warp::uniform_triangle;
 use crate::math::{Ray, Spawn, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
-use crate::sampler::SampleStream;
 use crate::scene::{Light, Material, Phong};
 use crate::shape::Shape;
-use crate::stats::Counters;
 use crate::world::{Hit, World};
 use std::f32::consts::{PI, TAU};
 
@@ -444,25 +442,19 @@ impl PathTracer {
 
 /// Whether the shadow ray from `from` to a light sample's target is
 /// blocked (counted and shown to the observer as a shadow ray).
-fn occluded(
-    world: &World,
+fn occluded<O: RayObserver>(
+    cx: &mut Trace<O>,
     from: &mut Spawn,
     target: Target,
     time: f32,
     depth: u32,
-    c: &mut Counters,
-    obs: &mut impl RayObserver,
 ) -> bool {
     let (ray, tmax) = match target {
         Target::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),
         Target::Direction(d) => (from.spawn_ray(d), f32::INFINITY),
         Target::Surface(s) => (from.spawn_ray_to_surface(&s), 1.0 - SHADOW_EPSILON),
     };
-    let ray = ray.at_time(time);
-    count_ray(c, RayKind::Shadow);
-    let blocked = world.occluded_leaving(&ray, 0.0, tmax, from.leaving, c);
-    obs.shadow(&ray, tmax, blocked, depth);
-    blocked
+    cx.blocked(&ray.at_time(time), tmax, from.leaving, depth)
 }
 
 /// The density per unit solid angle of [`sample_sphere_cone`] from `p`
@@ -512,15 +504,13 @@ fn sample_sphere_cone(p: Vec3, center: Vec3, radius: f32, u: Vec2) -> Option<Sur
 }
 
 impl Integrator for PathTracer {
-    fn li(
+    fn li<O: RayObserver>(
         &self,
-        world: &World,
+        cx: &mut Trace<O>,
         camera_ray: &Ray,
         tmin: f32,
-        stream: &mut SampleStream,
-        counters: &mut Counters,
-        observer: &mut impl RayObserver,
     ) -> (Vec3, Option<Hit>) {
+        let world = cx.world;
         let s = &self.settings;
         let background = world.background().color;
         let mut radiance = Vec3::ZERO;
@@ -534,15 +524,15 @@ impl Integrator for PathTracer {
         let mut prev: Option<(Vec3, f32, bool)> = None;
         let mut depth = 0u32;
         loop {
-            count_ray(counters, kind);
-            let hit = world.intersect(&ray, ray_tmin, f32::INFINITY, counters);
-            observer.ray(
-                kind,
+            let weight = beta.max_element();
+            let hit = cx.closest(
                 &ray,
-                hit.map_or(f32::INFINITY, |h| h.t),
-                depth,
-                beta.max_element(),
-                hit.map(|h| h.normal),
+                ray_tmin,
+                Branch {
+                    kind,
+                    depth,
+                    weight,
+                },
             );
             let Some(h) = hit else {
                 // The uniform environment: found only by BSDF sampling.
@@ -575,29 +565,24 @@ impl Integrator for PathTracer {
             // This vertex's dimensions, taken whether used or not, and
             // computed only where used: light choice, light point, lobe,
             // direction, roulette.
-            let dim = stream.dimension();
-            stream.skip_n(DIMS_PER_VERTEX);
+            let dim = cx.stream.dimension();
+            cx.stream.skip_n(DIMS_PER_VERTEX);
 
             let bsdf = Bsdf::from_phong(&m, h.normal);
             let wo = -ray.dir.normalize();
             let mut spawn = Spawn::leaving(h.surface_point(), h.prim);
             if s.strategy != Strategy::Bsdf && !bsdf.is_delta() {
-                if let Some((ls, choose)) =
-                    self.sample_light(world, h.point, stream.get_1d(dim), stream.get_2d(dim + 1))
-                {
+                if let Some((ls, choose)) = self.sample_light(
+                    world,
+                    h.point,
+                    cx.stream.get_1d(dim),
+                    cx.stream.get_2d(dim + 1),
+                ) {
                     let f = bsdf.f(wo, ls.wi);
                     let cos = ls.wi.dot(h.normal).abs();
                     if f != Vec3::ZERO
                         && cos > 0.0
-                        && !occluded(
-                            world,
-                            &mut spawn,
-                            ls.target,
-                            ray.time,
-                            depth + 1,
-                            counters,
-                            observer,
-                        )
+                        && !occluded(cx, &mut spawn, ls.target, ray.time, depth + 1)
                     {
                         let contribution = if ls.pdf > 0.0 {
                             let w = match s.strategy {
@@ -616,11 +601,11 @@ impl Integrator for PathTracer {
             }
             // One lobe needs no choice.
             let u_lobe = if bsdf.lobes().len() > 1 {
-                stream.get_1d(dim + 2)
+                cx.stream.get_1d(dim + 2)
             } else {
                 0.0
             };
-            let Some(bs) = bsdf.sample_f(wo, u_lobe, stream.get_2d(dim + 3)) else {
+            let Some(bs) = bsdf.sample_f(wo, u_lobe, cx.stream.get_2d(dim + 3)) else {
                 break;
             };
             let weight = bs.weight(h.normal);
@@ -631,7 +616,7 @@ impl Integrator for PathTracer {
             depth += 1;
             if depth > s.rr_depth {
                 let survive = beta.max_element().min(0.95);
-                if stream.get_1d(dim + 4) >= survive {
+                if cx.stream.get_1d(dim + 4) >= survive {
                     break;
                 }
                 beta /= survive;

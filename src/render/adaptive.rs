@@ -388,16 +388,13 @@ mod tests {
     struct StreamValue;
 
     impl Integrator for StreamValue {
-        fn li(
+        fn li<O: crate::integrator::RayObserver>(
             &self,
-            _: &World,
+            cx: &mut crate::integrator::Trace<O>,
             _: &crate::math::Ray,
             _: f32,
-            stream: &mut crate::sampler::SampleStream,
-            _: &mut Counters,
-            _: &mut impl crate::integrator::RayObserver,
         ) -> (Vec3, Option<crate::world::Hit>) {
-            (Vec3::splat(stream.next_1d()), None)
+            (Vec3::splat(cx.stream.next_1d()), None)
         }
     }
 
