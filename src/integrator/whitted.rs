@@ -150,10 +150,21 @@ impl Whitted {
         if depth >= self.bounces {
             return color;
         }
-        let child = |kind, weight| Branch {
-            kind,
-            depth: depth + 1,
-            weight,
+        // Light arriving along child rays of `kind` and `weight` around
+        // `axis`, on the `side` of the surface.
+        let child = |cx: &mut Trace<O>, axis, side, kind, weight| {
+            let lobe = Lobe {
+                axis,
+                side,
+                glossiness: m.glossiness,
+            };
+            let depth = depth + 1;
+            let b = Branch {
+                kind,
+                depth,
+                weight,
+            };
+            self.spread(cx, &hit.surface_point(), time, lobe, b)
         };
         let refl_w = b.weight * m.reflective.max_element();
         if refl_w > 0.0 && refl_w >= self.weight_cutoff {
@@ -162,13 +173,7 @@ impl Whitted {
                 // A smooth normal would mirror the ray into the surface.
                 r = reflect(d, ng);
             }
-            let lobe = Lobe {
-                axis: r,
-                side: ng,
-                glossiness: m.glossiness,
-            };
-            let b = child(RayKind::Reflected, refl_w);
-            color += m.reflective * self.spread(cx, &hit.surface_point(), time, lobe, b);
+            color += m.reflective * child(cx, r, ng, RayKind::Reflected, refl_w);
         }
         let trans_w = b.weight * m.transparent.max_element();
         if trans_w > 0.0 && trans_w >= self.weight_cutoff {
@@ -184,13 +189,7 @@ impl Whitted {
                     }
                 });
             if let Some(t) = through {
-                let lobe = Lobe {
-                    axis: t,
-                    side: -ng,
-                    glossiness: m.glossiness,
-                };
-                let b = child(RayKind::Transmitted, trans_w);
-                color += m.transparent * self.spread(cx, &hit.surface_point(), time, lobe, b);
+                color += m.transparent * child(cx, t, -ng, RayKind::Transmitted, trans_w);
             }
         }
         color

@@ -148,37 +148,16 @@ pub(crate) struct AnyHit<'a, F: ?Sized, S> {
 /// (incoherent any-hit rays) kept its time within 1%.
 macro_rules! by_octant {
     ($rd:expr, |O| $walk:expr) => {
+        by_octant!(@ $rd, $walk, [0 1 2 3 4 5 6] 7)
+    };
+    (@ $rd:expr, $walk:expr, [$($o:literal)*] $last:literal) => {
         match $rd.octant() {
-            0 => {
-                const O: usize = 0;
+            $($o => {
+                const O: usize = $o;
                 $walk
-            }
-            1 => {
-                const O: usize = 1;
-                $walk
-            }
-            2 => {
-                const O: usize = 2;
-                $walk
-            }
-            3 => {
-                const O: usize = 3;
-                $walk
-            }
-            4 => {
-                const O: usize = 4;
-                $walk
-            }
-            5 => {
-                const O: usize = 5;
-                $walk
-            }
-            6 => {
-                const O: usize = 6;
-                $walk
-            }
+            })*
             _ => {
-                const O: usize = 7;
+                const O: usize = $last;
                 $walk
             }
         }

@@ -21,7 +21,7 @@
 use super::lanes::{Lanes, W};
 use super::node::{is_leaf, Node, EMPTY, NO_ITEM};
 use super::traverse::{
-    self, BoxTest, Closest, Fallback, LeafRay, Nearest, RayData, Tree, ANY_OCTANT,
+    self, insert_far_first, BoxTest, Closest, Fallback, LeafRay, Nearest, RayData, Tree, ANY_OCTANT,
 };
 use crate::math::Ray;
 use crate::stats::TraversalStats;
@@ -260,6 +260,28 @@ fn child_rays(f: &Frustum, node: &Node, i: usize, active: u32, tmax: Lanes) -> u
     }
 }
 
+/// Calls `f(r, ray, leaf)` for each ray `r` of the mask `active`, with its
+/// [`LeafRay`] (made at the first leaf it reaches).
+#[inline(always)]
+fn each_ray(
+    rays: &[PacketRay],
+    leaf_ray: &mut [Option<LeafRay>; PACKET],
+    active: u32,
+    mut f: impl FnMut(usize, &PacketRay, &LeafRay),
+) {
+    let mut todo = active;
+    while todo != 0 {
+        let r = todo.trailing_zeros() as usize;
+        todo &= todo - 1;
+        let q = &rays[r];
+        f(
+            r,
+            q,
+            leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray)),
+        );
+    }
+}
+
 /// Each ray's `tmax`, one lane per ray.
 #[inline(always)]
 fn tmax_lanes(rays: &[PacketRay]) -> Lanes {
@@ -308,12 +330,7 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
                 }
                 let e = (node.child[i], m, dist[i]);
                 tree.prefetch_child(e.0);
-                let mut j = k;
-                while j > 0 && kids[j - 1].2 < e.2 {
-                    kids[j] = kids[j - 1];
-                    j -= 1;
-                }
-                kids[j] = e;
+                insert_far_first(&mut kids, k, e, |e| e.2);
                 k += 1;
             }
             if k > 0 {
@@ -325,19 +342,14 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
                 continue;
             }
         } else if cur != EMPTY {
-            let mut todo = active;
-            while todo != 0 {
-                let r = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                let q = &rays[r];
-                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray));
+            each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
                 let mut near = Nearest {
                     tmax: tmax[r],
                     best: best[r],
                 };
                 n_tests += tree.nearest_in_leaf::<S, _>(bt, cur, lr, q.tmin, &mut near);
                 (tmax[r], best[r]) = (near.tmax, near.best);
-            }
+            });
         }
         // Pop the nearest pending child that some ray can still find a
         // closer hit in (the entry's distance is below each ray's own).
@@ -410,12 +422,7 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
                 continue;
             }
         } else if cur != EMPTY {
-            let mut todo = active;
-            while todo != 0 {
-                let r = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                let q = &rays[r];
-                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray));
+            each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
                 let range = (q.tmin, q.tmax);
                 let (blocked, tests) = tree.blocked_in_leaf::<S, _>(bt, cur, lr, range, skip_of(r));
                 n_tests += tests;
@@ -423,7 +430,7 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
                     hit |= 1 << r;
                     open &= !(1 << r);
                 }
-            }
+            });
         }
         active = 0;
         while sp > 0 && open != 0 {

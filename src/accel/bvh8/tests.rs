@@ -234,17 +234,6 @@ fn every_item_is_in_one_block_of_its_leaf() {
 }
 
 #[test]
-fn empty_hits_nothing() {
-    let b = Bvh8::new(&[], vec![]);
-    let r = Ray::new(Vec3::ZERO, Vec3::X);
-    let mut c = Counters::default();
-    assert!(b
-        .intersect(Query::new(&[], &r, 0.0, f32::INFINITY), &mut c)
-        .is_none());
-    assert!(!b.occluded(Query::new(&[], &r, 0.0, f32::INFINITY), &mut c));
-}
-
-#[test]
 fn nearest_first_visits_few_nodes() {
     let prims: Vec<Primitive> = (0..4096)
         .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))

@@ -583,15 +583,9 @@ fn order<F: Fallback + ?Sized>(
     while mask != 0 {
         let i = mask.trailing_zeros() as usize;
         mask &= mask - 1;
-        // Insertion sort, far first.
         let e = (node.child[i], dist[i]);
         tree.prefetch_child(e.0);
-        let mut j = k;
-        while j > 0 && kids[j - 1].1 < e.1 {
-            kids[j] = kids[j - 1];
-            j -= 1;
-        }
-        kids[j] = e;
+        insert_far_first(&mut kids, k, e, |e| e.1);
         k += 1;
     }
     for &e in &kids[..k - 1] {
@@ -599,6 +593,19 @@ fn order<F: Fallback + ?Sized>(
         *sp += 1;
     }
     kids[k - 1].0
+}
+
+/// Inserts `e` into `kids[..k]` (one step of an insertion sort), kept far
+/// to near by `dist`; `e` goes after (nearer than) the entries as far as
+/// it.
+#[inline(always)]
+pub(crate) fn insert_far_first<T: Copy>(kids: &mut [T], k: usize, e: T, dist: impl Fn(&T) -> f32) {
+    let mut j = k;
+    while j > 0 && dist(&kids[j - 1]) < dist(&e) {
+        kids[j] = kids[j - 1];
+        j -= 1;
+    }
+    kids[j] = e;
 }
 
 /// The closest hit of a traversal: its parameter, its item id, and, for a
