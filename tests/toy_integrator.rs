@@ -5,7 +5,7 @@
 //! change to the render loop or the job.
 
 use crate::common::own_scene;
-use glint::integrator::{Integrator, RayKind, RayObserver, Trace};
+use glint::integrator::{Branch, Integrator, RayKind, RayObserver, Trace};
 use glint::math::{Ray, Vec3};
 use glint::render::{render_image, Adaptive, CameraModel, Control, Filter, PixelOffset, Settings};
 use glint::sampler::{Sampler, SamplerKind};
@@ -26,7 +26,8 @@ impl Integrator for NormalsAsColours {
         cx.counters.primary += 1;
         let hit = cx.world.intersect(ray, tmin, f32::INFINITY, cx.counters);
         let t_end = hit.map_or(f32::INFINITY, |h| h.t);
-        (cx.observer).ray(RayKind::Primary, ray, t_end, 0, 1.0, hit.map(|h| h.normal));
+        cx.observer
+            .ray(Branch::CAMERA, ray, t_end, hit.map(|h| h.normal));
         (hit.map_or(Vec3::ZERO, |h| Self::colour(h.normal)), hit)
     }
 }

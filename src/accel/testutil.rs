@@ -136,3 +136,13 @@ pub(crate) fn chain(n: i32) -> Vec<Primitive> {
         })
         .collect()
 }
+
+/// The closest hit of `ray` in `(0, ∞)` that `a` finds among `prims`.
+pub(crate) fn first_hit(
+    a: &impl Aggregate,
+    prims: &[Primitive],
+    ray: &Ray,
+) -> Option<super::PrimHit> {
+    let q = Query::new(prims, ray, 0.0, f32::INFINITY);
+    a.intersect(q, &mut Counters::default())
+}

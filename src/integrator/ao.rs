@@ -48,7 +48,8 @@ pub fn unoccluded<O: RayObserver>(
         super::count_ray(cx.counters, RayKind::Occlusion);
         let blocked = cx.world.occluded(&ray, 0.0, ao.distance, cx.counters);
         let t_end = if blocked { f32::NAN } else { ao.distance };
-        (cx.observer).ray(RayKind::Occlusion, &ray, t_end, depth, 0.0, None);
+        let b = Branch::probe(RayKind::Occlusion, depth);
+        cx.observer.ray(b, &ray, t_end, None);
         open += u32::from(!blocked);
     }
     open as f32 / k as f32

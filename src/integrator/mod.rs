@@ -12,7 +12,7 @@ mod whitted;
 
 pub use ao::{AmbientOcclusion, AoSettings};
 pub use kind::IntegratorKind;
-pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
+pub use observer::{Branch, NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
 pub use path::{LightChoice, PathSettings, PathTracer, Strategy};
 pub use whitted::Whitted;
 
@@ -49,28 +49,6 @@ pub struct Trace<'a, 's, O> {
     pub observer: &'a mut O,
 }
 
-/// A ray's place in the ray tree: its role, its recursion depth (0 for a
-/// camera ray) and its contribution to the pixel (for pruning and the
-/// observer).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Branch {
-    /// The ray's role.
-    pub kind: RayKind,
-    /// Recursion depth.
-    pub depth: u32,
-    /// Contribution (max channel of the path's weight).
-    pub weight: f32,
-}
-
-impl Branch {
-    /// A camera ray.
-    pub const CAMERA: Branch = Branch {
-        kind: RayKind::Primary,
-        depth: 0,
-        weight: 1.0,
-    };
-}
-
 impl<O: RayObserver> Trace<'_, '_, O> {
     /// The closest hit of `ray` beyond `tmin`, the ray counted and shown to
     /// the observer as one at branch `b`.
@@ -82,7 +60,7 @@ impl<O: RayObserver> Trace<'_, '_, O> {
             .intersect(ray, tmin, f32::INFINITY, self.counters);
         let t_end = hit.map_or(f32::INFINITY, |h| h.t);
         let normal = hit.map(|h| h.normal);
-        (self.observer).ray(b.kind, ray, t_end, b.depth, b.weight, normal);
+        self.observer.ray(b, ray, t_end, normal);
         hit
     }
 

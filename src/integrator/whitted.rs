@@ -329,10 +329,15 @@ impl Whitted {
         for _ in 0..64 {
             let (ray, tmax) = target.ray_from(&mut from, time);
             let Some(h) = world.intersect(&ray, 0.0, tmax, c) else {
-                obs.ray(RayKind::Shadow, &ray, tmax, depth, 0.0, None);
+                obs.ray(Branch::probe(RayKind::Shadow, depth), &ray, tmax, None);
                 return filter;
             };
-            obs.ray(RayKind::Shadow, &ray, h.t, depth, 0.0, Some(h.normal));
+            obs.ray(
+                Branch::probe(RayKind::Shadow, depth),
+                &ray,
+                h.t,
+                Some(h.normal),
+            );
             filter *= self.material_at(world, &h).transparent;
             if filter == Vec3::ZERO {
                 return filter;

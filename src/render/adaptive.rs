@@ -17,11 +17,10 @@
 
 use super::film::{merge, tiles, TileFilm};
 use super::pixel::{render_unit, PixelSink, PixelStrategy, PixelValue, Step};
-use super::{CameraModel, Control, Filter, Frame, PixelCost, Rendered, SampleRecord, Settings};
+use super::{Filter, Frame, PixelCost, Render, Rendered, SampleRecord, Settings};
 use crate::integrator::Integrator;
 use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
-use crate::world::World;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -90,14 +89,14 @@ impl<I: Integrator> Tracer<'_, I> {
 }
 
 /// Renders with adaptive subdivision (called by [`super::render_image`]).
-pub(super) fn render<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    settings: &Settings,
-    a: &Adaptive,
-    control: Control,
-) -> Rendered {
+pub(super) fn render<I: Integrator>(r: &Render<I>, a: &Adaptive) -> Rendered {
+    let Render {
+        world,
+        camera,
+        integrator,
+        settings,
+        control,
+    } = *r;
     let (w, h) = settings.size;
     let depth = a.max_depth.min(Adaptive::MAX_DEPTH);
     let tracer = Tracer {
@@ -310,6 +309,8 @@ fn spread(c: &[Vec3; 4]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::{CameraModel, Control};
+    use crate::world::World;
     use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
     #[test]

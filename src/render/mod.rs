@@ -166,13 +166,29 @@ pub fn render_image<I: Integrator>(
     settings: &Settings,
     control: Control,
 ) -> Rendered {
+    let r = &Render {
+        world,
+        camera,
+        integrator,
+        settings,
+        control,
+    };
     if let Some(a) = settings.adaptive {
-        return adaptive::render(world, camera, integrator, settings, &a, control);
+        return adaptive::render(r, &a);
     }
     if settings.filter.support() == 0 {
-        return render_bands(world, camera, integrator, settings, control);
+        return render_bands(r);
     }
-    render_tiles(world, camera, integrator, settings, control, None)
+    render_tiles(r, None)
+}
+
+/// One render's inputs, as every path (bands, tiles, adaptive) takes them.
+pub(crate) struct Render<'a, I> {
+    pub world: &'a World,
+    pub camera: &'a CameraModel,
+    pub integrator: &'a I,
+    pub settings: &'a Settings,
+    pub control: Control<'a>,
 }
 
 /// Renders only what the pixels of `region` need: every tile whose film
@@ -192,22 +208,29 @@ pub fn render_region<I: Integrator>(
     control: Control,
     region: Rect,
 ) -> Rendered {
+    let r = &Render {
+        world,
+        camera,
+        integrator,
+        settings,
+        control,
+    };
     if let Some(a) = settings.adaptive {
-        return adaptive::render(world, camera, integrator, settings, &a, control);
+        return adaptive::render(r, &a);
     }
-    render_tiles(world, camera, integrator, settings, control, Some(region))
+    render_tiles(r, Some(region))
 }
 
 /// The tile loop of [`render_image`] and [`render_region`]: each tile's
 /// pixels into a film of the tile and its filter margin, the films merged.
-fn render_tiles<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    settings: &Settings,
-    control: Control,
-    region: Option<Rect>,
-) -> Rendered {
+fn render_tiles<I: Integrator>(r: &Render<I>, region: Option<Rect>) -> Rendered {
+    let Render {
+        world,
+        camera,
+        integrator,
+        settings,
+        control,
+    } = *r;
     let (w, h) = settings.size;
     let rects = tiles(w, h, settings.tile_size);
     let support = settings.filter.support();
@@ -270,13 +293,14 @@ fn render_tiles<I: Integrator>(
 /// [`BAND_ROWS`] full rows written straight into the frame, with no film and
 /// no copy. The arithmetic is the film's (`0 + w·c + …`, samples in index
 /// order), so the image is the one the tiled path would give, bit for bit.
-fn render_bands<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    settings: &Settings,
-    control: Control,
-) -> Rendered {
+fn render_bands<I: Integrator>(r: &Render<I>) -> Rendered {
+    let Render {
+        world,
+        camera,
+        integrator,
+        settings,
+        control,
+    } = *r;
     let (w, h) = settings.size;
     let mut frame = Frame::new(w, h);
     let wu = w as usize;

@@ -155,11 +155,16 @@ mod tests {
         }
     }
 
+    /// 16 unit spheres along the x axis, 3 apart.
+    fn row_of_16() -> Vec<Primitive> {
+        (0..16)
+            .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))
+            .collect()
+    }
+
     #[test]
     fn the_far_child_is_skipped_once_the_near_one_hits() {
-        let prims: Vec<Primitive> = (0..16)
-            .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))
-            .collect();
+        let prims = row_of_16();
         let b = Bvh::new(&prims, all(&prims), Split::Sah);
         for (o, d, first) in [(-5.0, 1.0, 0), (60.0, -1.0, 15)] {
             let r = Ray::new(Vec3::X * o, Vec3::X * d);
@@ -175,9 +180,7 @@ mod tests {
 
     #[test]
     fn occlusion_stops_at_the_first_hit() {
-        let prims: Vec<Primitive> = (0..16)
-            .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))
-            .collect();
+        let prims = row_of_16();
         let b = Bvh::new(&prims, all(&prims), Split::Median);
         // Leaves hold 4 spheres (in arbitrary order): the ray starts between
         // the 2nd and 3rd leaf and must stop inside the 3rd.

@@ -263,11 +263,11 @@ fn child_rays(f: &Frustum, node: &Node, i: usize, active: u32, tmax: Lanes) -> u
 /// Calls `f(r, ray, leaf)` for each ray `r` of the mask `active`, with its
 /// [`LeafRay`] (made at the first leaf it reaches).
 #[inline(always)]
-fn each_ray(
-    rays: &[PacketRay],
-    leaf_ray: &mut [Option<LeafRay>; PACKET],
+fn each_ray<'r>(
+    rays: &'r [PacketRay],
+    leaf_ray: &mut [Option<LeafRay<'r>>; PACKET],
     active: u32,
-    mut f: impl FnMut(usize, &PacketRay, &LeafRay),
+    mut f: impl FnMut(usize, &'r PacketRay, &LeafRay<'r>),
 ) {
     let mut todo = active;
     while todo != 0 {

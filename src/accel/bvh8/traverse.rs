@@ -105,7 +105,7 @@ impl<'a, F: Fallback + ?Sized> Tree<'a, F> {
             }
             if b.has_other() {
                 for id in b.others() {
-                    if let Some(t) = self.fallback.intersect(id, &lr.ray, tmin, near.test_tmax()) {
+                    if let Some(t) = self.fallback.intersect(id, lr.ray, tmin, near.test_tmax()) {
                         near.offer(t, id, None);
                     }
                 }
@@ -134,7 +134,7 @@ impl<'a, F: Fallback + ?Sized> Tree<'a, F> {
             if lr.triangles(bt, b, tmin, tmax, skip).0 != 0
                 || (b.has_other()
                     && b.others()
-                        .any(|id| self.fallback.intersect(id, &lr.ray, tmin, tmax).is_some()))
+                        .any(|id| self.fallback.intersect(id, lr.ray, tmin, tmax).is_some()))
             {
                 return (true, tests);
             }
@@ -172,8 +172,10 @@ pub(crate) const ANY_OCTANT: usize = 8;
 /// and the same splatted for the four-lane pre-test. Made at the first leaf
 /// a ray reaches: many rays (shadow rays from the floor, camera rays past
 /// the mesh) never reach one.
-pub(crate) struct LeafRay {
-    ray: Ray,
+pub(crate) struct LeafRay<'r> {
+    /// The ray itself (for the fallback's items), by reference: a copy
+    /// made every query's `Option<LeafRay>` larger to set up.
+    ray: &'r Ray,
     wt: WatertightRay,
     w4: WatertightRay4,
 }
@@ -410,12 +412,12 @@ impl RayData {
     }
 }
 
-impl LeafRay {
+impl<'r> LeafRay<'r> {
     #[inline(always)]
-    pub(crate) fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &'r Ray) -> Self {
         let wt = WatertightRay::new(ray);
         LeafRay {
-            ray: *ray,
+            ray,
             wt,
             w4: WatertightRay4::new(&wt),
         }

@@ -182,7 +182,9 @@ impl Aggregate for Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::testutil::{assert_agrees, assert_agrees_on, ray, soup, sphere, Rng};
+    use crate::accel::testutil::{
+        assert_agrees, assert_agrees_on, first_hit, ray, soup, sphere, Rng,
+    };
 
     fn all(prims: &[Primitive]) -> Vec<u32> {
         (0..prims.len() as u32).collect()
@@ -230,21 +232,11 @@ mod tests {
         ];
         let g = Grid::new(&prims, all(&prims), Some([12, 1, 1]));
         let r = Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::X);
-        let h = g
-            .intersect(
-                Query::new(&prims, &r, 0.0, f32::INFINITY),
-                &mut Counters::default(),
-            )
-            .unwrap();
+        let h = first_hit(&g, &prims, &r).unwrap();
         assert_eq!(h.prim, 0);
         assert!((h.t - 1.5).abs() < 1e-5);
         let r = Ray::new(Vec3::new(3.0, 0.0, -3.0), Vec3::Z);
-        let h = g
-            .intersect(
-                Query::new(&prims, &r, 0.0, f32::INFINITY),
-                &mut Counters::default(),
-            )
-            .unwrap();
+        let h = first_hit(&g, &prims, &r).unwrap();
         assert_eq!(h.prim, 1);
     }
 

@@ -291,16 +291,32 @@ mod tests {
         assert_agrees(&o, &prims, 500);
     }
 
-    #[test]
-    fn crowded_cells_split_and_primitives_live_in_leaves() {
-        // 64 small spheres on a 4×4×4 lattice: one split separates them into
-        // octants of 8, which stay leaves.
-        let prims: Vec<Primitive> = (0..64)
+    /// 64 small spheres on a 4×4×4 lattice.
+    fn lattice_of_64() -> Vec<Primitive> {
+        (0..64)
             .map(|i| {
                 let p = Vec3::new((i % 4) as f32, (i / 4 % 4) as f32, (i / 16) as f32);
                 sphere(p, 0.2)
             })
-            .collect();
+            .collect()
+    }
+
+    /// A root split on every axis, its children first, holding `count`
+    /// references itself.
+    fn root_split_in_8(count: u32) -> Node {
+        Node::Inner {
+            first: 1,
+            axes: 7,
+            start: 0,
+            count,
+        }
+    }
+
+    #[test]
+    fn crowded_cells_split_and_primitives_live_in_leaves() {
+        // 64 small spheres on a 4×4×4 lattice: one split separates them into
+        // octants of 8, which stay leaves.
+        let prims = lattice_of_64();
         let o = Octree::new(&prims, all(&prims));
         assert_eq!(o.node_count(), 9);
         assert_eq!(o.depth(), 1);
@@ -315,15 +331,7 @@ mod tests {
             assert!(leaf && d == 1);
             assert!((b.extent() - octant).abs().max_element() < 1e-5);
         }
-        assert_eq!(
-            o.nodes[0],
-            Node::Inner {
-                first: 1,
-                axes: 7,
-                start: 0,
-                count: 0
-            }
-        );
+        assert_eq!(o.nodes[0], root_split_in_8(0));
         assert_agrees(&o, &prims, 2000);
     }
 
@@ -436,23 +444,10 @@ mod tests {
     #[test]
     fn a_straddling_sphere_stays_at_the_root() {
         // 64 small spheres on a lattice plus one big sphere across the middle.
-        let mut prims: Vec<Primitive> = (0..64)
-            .map(|i| {
-                let p = Vec3::new((i % 4) as f32, (i / 4 % 4) as f32, (i / 16) as f32);
-                sphere(p, 0.2)
-            })
-            .collect();
+        let mut prims = lattice_of_64();
         prims.push(sphere(Vec3::splat(1.5), 0.3));
         let o = Octree::with_storage(&prims, all(&prims), Storage::Inner);
-        assert_eq!(
-            o.nodes[0],
-            Node::Inner {
-                first: 1,
-                axes: 7,
-                start: 0,
-                count: 1
-            }
-        );
+        assert_eq!(o.nodes[0], root_split_in_8(1));
         assert_eq!(o.items[0], 64);
         let leaf_items: Vec<Leaf> = o
             .walk(
