@@ -140,7 +140,18 @@ impl Whitted {
         let from = &mut Spawn::leaving(hit.surface_point(), hit.prim);
         for (i, light) in world.lights().iter().enumerate() {
             if !is_delta(light) {
-                color += self.area_light(cx, at, from, light);
+                // An area light: the mean over `shadow_samples` points of
+                // it, stratified by one split dimension of the stream, each
+                // with its own shadow ray (the penumbra is the fraction of
+                // them blocked), from the hit to the sampled point with both
+                // ends offset out of their error bounds.
+                let k = self.shadow_samples.max(1);
+                let mut sum = Vec3::ZERO;
+                for u in cx.stream.split_2d(k) {
+                    let inc = sample_light(light, from.from.p, u);
+                    sum += self.lit(cx, at, from, light, &inc);
+                }
+                color += sum / k as f32;
                 continue;
             }
             let inc = world.incident(i, p);
@@ -224,28 +235,6 @@ impl Whitted {
             let child = from.spawn_ray(w).at_time(time);
             cx.counters.glossy += 1;
             sum += self.trace_sampled(cx, &child, 0.0, b).0;
-        }
-        sum / k as f32
-    }
-
-    /// Light from an area light: the mean over `shadow_samples` points of it,
-    /// stratified by one split dimension of the stream, each with its own
-    /// shadow ray (the penumbra is the fraction of them blocked), from the
-    /// hit to the sampled point with both ends offset out of their error
-    /// bounds.
-    fn area_light<O: RayObserver>(
-        &self,
-        cx: &mut Trace<O>,
-        at: &Shaded,
-        from: &mut Spawn,
-        light: &Light,
-    ) -> Vec3 {
-        let k = self.shadow_samples.max(1);
-        let p = from.from.p;
-        let mut sum = Vec3::ZERO;
-        for u in cx.stream.split_2d(k) {
-            let inc = sample_light(light, p, u);
-            sum += self.lit(cx, at, from, light, &inc);
         }
         sum / k as f32
     }

@@ -90,22 +90,11 @@ impl<I: Integrator> Tracer<'_, I> {
 
 /// Renders with adaptive subdivision (called by [`super::render_image`]).
 pub(super) fn render<I: Integrator>(r: &Render<I>, a: &Adaptive) -> Rendered {
-    let Render {
-        world,
-        camera,
-        integrator,
-        settings,
-        control,
-    } = *r;
+    let (settings, control) = (r.settings, r.control);
     let (w, h) = settings.size;
     let depth = a.max_depth.min(Adaptive::MAX_DEPTH);
     let tracer = Tracer {
-        step: Step {
-            world,
-            camera,
-            integrator,
-            size: (w, h),
-        },
+        step: r.step(),
         settings,
         steps: 1 << depth,
     };

@@ -244,13 +244,15 @@ impl<F: Fallback + ?Sized, S: TraversalStats> Walk for AnyHits<'_, F, S> {
 mod tests {
     use super::*;
     use crate::accel::bvh8::node::NO_ITEM;
+    use crate::accel::bvh8::PACKET;
     use crate::accel::testutil::{ray, soup, Rng};
     use crate::accel::Bvh8;
     use crate::stats::Counters;
 
     /// The portable copy gives the dispatched (AVX2) copy's answers and
-    /// statistics, bit for bit, with either stack. Skipped, with a line, on
-    /// a CPU without AVX2 and FMA (where both are the portable copy).
+    /// statistics, bit for bit, with either stack, for single rays and
+    /// packets. Skipped, with a line, on a CPU without AVX2 and FMA (where
+    /// both are the portable copy).
     #[test]
     fn the_portable_copy_answers_as_the_dispatched_one() {
         #[cfg(target_arch = "x86_64")]
@@ -261,8 +263,14 @@ mod tests {
         let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
         let mut r = Rng::new(10);
         let (mut hits, mut blocked) = (0, 0);
+        let mut packet = Vec::new();
         for _ in 0..1000 {
             let q = ray(&mut r);
+            packet.push(PacketRay {
+                ray: q,
+                tmin: 0.0,
+                tmax: 3.0,
+            });
             for deep in [false, true] {
                 let tree = Tree {
                     deep,
@@ -289,9 +297,43 @@ mod tests {
                 let want = run(any(&mut c1));
                 let got = run_portable(any(&mut c2));
                 assert_eq!(got, want);
-                assert_eq!(format!("{c1:?}"), format!("{c2:?}"));
                 hits += usize::from(want);
                 blocked += usize::from(got);
+                if packet.len() == PACKET {
+                    let rays = &packet[..];
+                    let (mut a, mut c) = ([None; PACKET], [None; PACKET]);
+                    run(ClosestHits {
+                        tree,
+                        rays,
+                        out: &mut a,
+                        stats: &mut c1,
+                    });
+                    run_portable(ClosestHits {
+                        tree,
+                        rays,
+                        out: &mut c,
+                        stats: &mut c2,
+                    });
+                    assert_eq!(a, c);
+                    let skip = &[];
+                    let x = run(AnyHits {
+                        tree,
+                        rays,
+                        skip,
+                        stats: &mut c1,
+                    });
+                    let y = run_portable(AnyHits {
+                        tree,
+                        rays,
+                        skip,
+                        stats: &mut c2,
+                    });
+                    assert_eq!(x, y);
+                }
+                assert_eq!(format!("{c1:?}"), format!("{c2:?}"));
+            }
+            if packet.len() == PACKET {
+                packet.clear();
             }
         }
         assert!((100..1900).contains(&hits) && blocked == hits, "{hits}");

@@ -312,10 +312,7 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
     let (mut cur, mut active) = (0u32, walked);
     while active != 0 {
         if !is_leaf(cur) {
-            let node = &tree.nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
+            let node = tree.node::<S>(cur, &mut n_nodes);
             let (mut mask, dist) = f.boxes(node, tmax.max_of(active));
             let dist = dist.to_array();
             // Nearest first: the others pushed far to near.
@@ -396,10 +393,7 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
     let (mut cur, mut active) = (0u32, walked);
     loop {
         if !is_leaf(cur) {
-            let node = &tree.nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
+            let node = tree.node::<S>(cur, &mut n_nodes);
             let (mut mask, _) = f.boxes(node, tmax_hi);
             let mut next = None;
             while mask != 0 {

@@ -2,7 +2,6 @@
 //! own walk gets, bit for bit.
 
 use super::*;
-use crate::accel::bvh8::dispatch::{self, AnyHits, ClosestHits};
 use crate::accel::bvh8::Bvh8;
 use crate::accel::testutil::{ray, soup, sphere, terrain, terrain_ray, Rng};
 use crate::math::Vec3;
@@ -243,57 +242,6 @@ fn packets_skip_each_rays_own_triangle() {
         }
     }
     assert!(blocked > 50, "{blocked}");
-}
-
-/// The portable copy of the packet walks answers as the dispatched one
-/// (the AVX2 copy; skipped, with a line, on a CPU without AVX2 and FMA).
-#[test]
-fn the_portable_packet_copy_answers_as_the_dispatched_one() {
-    #[cfg(target_arch = "x86_64")]
-    if !crate::testdata::avx2_fma("the_portable_packet_copy_answers_as_the_dispatched_one") {
-        return;
-    }
-    let prims = soup(9, 2000);
-    let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
-    let mut r = Rng::new(10);
-    for _ in 0..300 {
-        let rays: Vec<PacketRay> = (0..PACKET).map(|_| pr(ray(&mut r), 0.0, 3.0)).collect();
-        let rays = &rays[..];
-        for deep in [false, true] {
-            let tree = Tree {
-                deep,
-                ..b.tree(prims.as_slice())
-            };
-            let (mut a, mut c) = ([None; PACKET], [None; PACKET]);
-            let stats = &mut NoStats;
-            dispatch::run(ClosestHits {
-                tree,
-                rays,
-                out: &mut a,
-                stats,
-            });
-            dispatch::run_portable(ClosestHits {
-                tree,
-                rays,
-                out: &mut c,
-                stats,
-            });
-            assert_eq!(a, c);
-            let x = dispatch::run(AnyHits {
-                tree,
-                rays,
-                skip: &[],
-                stats,
-            });
-            let y = dispatch::run_portable(AnyHits {
-                tree,
-                rays,
-                skip: &[],
-                stats,
-            });
-            assert_eq!(x, y);
-        }
-    }
 }
 
 /// The packet's one box test keeps every box some ray's own test (the

@@ -56,6 +56,15 @@ impl<F: ?Sized> Clone for Tree<'_, F> {
 impl<F: ?Sized> Copy for Tree<'_, F> {}
 
 impl<'a, F: Fallback + ?Sized> Tree<'a, F> {
+    /// Inner node `c`, counted in `n_nodes` when `S` keeps statistics.
+    #[inline(always)]
+    pub(crate) fn node<S: TraversalStats>(&self, c: u32, n_nodes: &mut u64) -> &'a Node {
+        if S::ENABLED {
+            *n_nodes += 1;
+        }
+        &self.nodes[c as usize]
+    }
+
     /// The blocks of leaf `c`.
     #[inline(always)]
     pub(crate) fn leaf(&self, c: u32) -> &'a [Tri4] {
@@ -701,10 +710,7 @@ pub(crate) fn closest<
     let mut cur = 0u32;
     loop {
         if !is_leaf(cur) {
-            let node = &tree.nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
+            let node = tree.node::<S>(cur, &mut n_nodes);
             let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(near.tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
@@ -767,10 +773,7 @@ pub(crate) fn any<
     let mut cur = 0u32;
     let hit = loop {
         if !is_leaf(cur) {
-            let node = &tree.nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
+            let node = tree.node::<S>(cur, &mut n_nodes);
             // No ordering: any occluder ends the walk, and sorting costs
             // more than it saves for shadow rays.
             let (mut mask, _) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
