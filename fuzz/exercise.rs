@@ -6,7 +6,7 @@
 use glint::format::gltf::parse_gltf;
 use glint::format::ply::parse_ply;
 use glint::format::{obj::load_obj_from_bytes, parse_scene};
-use glint::integrator::{AoSettings, NoObserver, RayKind, Whitted};
+use glint::integrator::{AoSettings, Integrator, NoObserver, Trace, Whitted};
 use glint::job::{Job, Output};
 use glint::limits;
 use glint::math::{Vec2, Vec3};
@@ -239,17 +239,13 @@ fn trace_a_few(scene: &Scene) {
                     stream.next_2d();
                     let ray =
                         camera.sample_ray(screen_point(i, j, Vec2::splat(0.5), 3, 3), &mut stream);
-                    let (_color, hit) = integrator.trace_sampled(
-                        &world,
-                        &ray,
-                        camera.tmin(),
-                        RayKind::Primary,
-                        0,
-                        1.0,
-                        &mut stream,
-                        &mut c,
-                        &mut NoObserver,
-                    );
+                    let cx = &mut Trace {
+                        world: &world,
+                        stream: &mut stream,
+                        counters: &mut c,
+                        observer: &mut NoObserver,
+                    };
+                    let (_color, hit) = integrator.li(cx, &ray, camera.tmin());
                     if let Some(h) = hit.filter(|_| ray.origin.is_finite() && ray.dir.is_finite()) {
                         assert!(!h.t.is_nan(), "NaN t for {ray:?}");
                         assert!(!h.normal.is_nan(), "NaN normal for {ray:?}: {h:?}");

@@ -705,7 +705,10 @@ fn cost_report() {
                 grid.set_mailbox(on);
                 let mut c = Counters::default();
                 for q in &queries {
-                    grid.intersect(w.prims(), &q.ray, q.tmin, q.tmax, &mut c);
+                    grid.intersect(
+                        glint::accel::Query::new(w.prims(), &q.ray, q.tmin, q.tmax),
+                        &mut c,
+                    );
                 }
                 println!(
                     "{name:6} {:32} mailbox {on:5}  tests/ray {:8.2}",

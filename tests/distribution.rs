@@ -20,7 +20,7 @@
 //!
 //! Numbers are printed with `--nocapture`.
 
-use glint::integrator::{AmbientOcclusion, AoSettings, Integrator, NoObserver, RayKind, Whitted};
+use glint::integrator::{AmbientOcclusion, AoSettings, Integrator, NoObserver, Trace, Whitted};
 use glint::light::{is_delta, sample_light};
 use glint::math::{Keyframe, Motion, Ray, Vec2, Vec3};
 use glint::render::{render_image, CameraModel, Control, PixelOffset, Settings};
@@ -194,16 +194,15 @@ fn rectangle_light_past_an_occluder_edge() {
         };
         let ray = Ray::new(Vec3::new(xp, 1.0, 0.3), Vec3::NEG_Y);
         let mut st = stream_of(&sampler, 0);
-        let (col, _) = w.trace_sampled(
-            &world,
+        let (col, _) = w.li(
+            &mut Trace {
+                world: &world,
+                stream: &mut st,
+                counters: &mut c,
+                observer: &mut NoObserver,
+            },
             &ray,
             0.0,
-            RayKind::Primary,
-            0,
-            1.0,
-            &mut st,
-            &mut c,
-            &mut NoObserver,
         );
         let want_e = if cut < 2.0 { lambert(p, cut, 2.0) } else { 0.0 };
         let err = (col.x as f64 - want_e).abs() / want_e.max(0.05);
@@ -236,7 +235,13 @@ fn ao_along(world: &World, ray: Ray, samples: u32, distance: f32) -> (f32, Count
     };
     let mut st = stream_of(&sampler, 0);
     let mut counters = Counters::default();
-    let (c, hit) = ao.li(world, &ray, 0.0, &mut st, &mut counters, &mut NoObserver);
+    let cx = &mut Trace {
+        world,
+        stream: &mut st,
+        counters: &mut counters,
+        observer: &mut NoObserver,
+    };
+    let (c, hit) = ao.li(cx, &ray, 0.0);
     assert!(hit.is_some());
     (c.x, counters)
 }
@@ -336,16 +341,15 @@ fn whitted_scales_only_its_ambient_term_by_ambient_occlusion() {
             ..Whitted::default()
         };
         let mut st = stream_of(&sampler, 0);
-        let (col, _) = w.trace_sampled(
-            &world,
+        let (col, _) = w.li(
+            &mut Trace {
+                world: &world,
+                stream: &mut st,
+                counters: &mut Counters::default(),
+                observer: &mut NoObserver,
+            },
             &ray,
             0.0,
-            RayKind::Primary,
-            0,
-            1.0,
-            &mut st,
-            &mut Counters::default(),
-            &mut NoObserver,
         );
         col.x
     };
@@ -1019,18 +1023,13 @@ fn split_rays_converge_too() {
             .map(|(i, &o)| {
                 let mut st = sampler.stream((i as u32, 0), 0);
                 st.next_2d();
-                w.trace_sampled(
-                    &world,
-                    &Ray::new(o, Vec3::NEG_Y),
-                    0.0,
-                    RayKind::Primary,
-                    0,
-                    1.0,
-                    &mut st,
-                    &mut Counters::default(),
-                    &mut NoObserver,
-                )
-                .0
+                let cx = &mut Trace {
+                    world: &world,
+                    stream: &mut st,
+                    counters: &mut Counters::default(),
+                    observer: &mut NoObserver,
+                };
+                w.li(cx, &Ray::new(o, Vec3::NEG_Y), 0.0).0
             })
             .collect()
     };

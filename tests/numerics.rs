@@ -7,7 +7,7 @@
 //! [`check_scene`], which takes the [`BuildOptions`], so the same cases can
 //! be run against every acceleration structure (`AccelKind`) as they appear.
 
-use glint::integrator::{RayKind, RayObserver, Whitted};
+use glint::integrator::{Branch, RayObserver, Whitted};
 use glint::material::TextureSpace;
 use glint::math::{Mat4, Ray, Vec3};
 use glint::render::{render, screen_point, CameraModel, Frame, PixelOffset};
@@ -579,7 +579,8 @@ struct FiniteRays {
 }
 
 impl RayObserver for FiniteRays {
-    fn ray(&mut self, kind: RayKind, ray: &Ray, _: f32, depth: u32, _: f32, n: Option<Vec3>) {
+    fn ray(&mut self, b: Branch, ray: &Ray, _: f32, n: Option<Vec3>) {
+        let (kind, depth) = (b.kind, b.depth);
         let ok = ray.origin.is_finite()
             && ray.dir.is_finite()
             && ray.dir != Vec3::ZERO

@@ -200,7 +200,7 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
 
     #[test]
-    fn random_scenes_parse_build_and_render_safely((text, objects) in scene_file()) {
+    fn random_scenes_parse_build_and_render_safely((text, _objects) in scene_file()) {
         let start = Instant::now();
         let scene = match parse_scene(&text, Path::new("random.txt")) {
             Ok(s) => s,
@@ -226,9 +226,11 @@ proptest! {
         for c in &frame.color {
             prop_assert!(c.is_finite(), "colour {c} for\n{text}");
         }
-        // Bounded time per primitive: 16 pixels, 3 bounces, a few lights.
-        let budget = Duration::from_millis(500) * (world.prims().len().max(objects) as u32 + 1);
-        prop_assert!(start.elapsed() < budget, "{:?} for\n{text}", start.elapsed());
+        // A guard against a hang (a loop that never ends on some scene),
+        // not a speed test: the limit is far beyond a 16-pixel render on a
+        // loaded machine. Render speed is measured by scripts/bench-ab.sh.
+        let hang = Duration::from_secs(120);
+        prop_assert!(start.elapsed() < hang, "no end after {:?} (a hang) for\n{text}", start.elapsed());
     }
 }
 

@@ -5,11 +5,10 @@
 //! change to the render loop or the job.
 
 use crate::common::own_scene;
-use glint::integrator::{Integrator, RayKind, RayObserver};
+use glint::integrator::{Branch, Integrator, RayKind, RayObserver, Trace};
 use glint::math::{Ray, Vec3};
 use glint::render::{render_image, Adaptive, CameraModel, Control, Filter, PixelOffset, Settings};
-use glint::sampler::{SampleStream, Sampler, SamplerKind};
-use glint::stats::Counters;
+use glint::sampler::{Sampler, SamplerKind};
 use glint::world::{BuildOptions, Hit, World};
 
 /// The camera ray's hit normal mapped from `[-1, 1]` to `[0, 1]`; black for a
@@ -23,19 +22,12 @@ impl NormalsAsColours {
 }
 
 impl Integrator for NormalsAsColours {
-    fn li(
-        &self,
-        world: &World,
-        ray: &Ray,
-        tmin: f32,
-        _: &mut SampleStream,
-        counters: &mut Counters,
-        observer: &mut impl RayObserver,
-    ) -> (Vec3, Option<Hit>) {
-        counters.primary += 1;
-        let hit = world.intersect(ray, tmin, f32::INFINITY, counters);
+    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
+        cx.counters.primary += 1;
+        let hit = cx.world.intersect(ray, tmin, f32::INFINITY, cx.counters);
         let t_end = hit.map_or(f32::INFINITY, |h| h.t);
-        observer.ray(RayKind::Primary, ray, t_end, 0, 1.0, hit.map(|h| h.normal));
+        cx.observer
+            .ray(Branch::CAMERA, ray, t_end, hit.map(|h| h.normal));
         (hit.map_or(Vec3::ZERO, |h| Self::colour(h.normal)), hit)
     }
 }

@@ -6,7 +6,7 @@
 use crate::common::*;
 use glint::accel::bvh::NodeVisit;
 use glint::accel::grid::{Face, Lattice};
-use glint::accel::{Bvh, Grid, Split};
+use glint::accel::{Bvh, Grid, Query, Split};
 use glint::math::{Ray, Vec3};
 use glint::stats::Counters;
 use glint::world::{BuildOptions, World};
@@ -103,10 +103,7 @@ fn grid_cells_equal_an_independent_parametric_walk() {
             let ray = random_ray(&mut r, centre, size);
             let mut visited = Vec::new();
             let hit = grid.intersect_visiting(
-                world.prims(),
-                &ray,
-                0.0,
-                f32::INFINITY,
+                Query::new(world.prims(), &ray, 0.0, f32::INFINITY),
                 &mut Counters::default(),
                 |c| {
                     visited.push((c.index, c.entered, c.t_enter, c.t_exit));
@@ -147,10 +144,7 @@ fn bvh_enters_exactly_the_boxes_it_must() {
             let ray = random_ray(&mut r, centre, size);
             let mut visits: Vec<NodeVisit> = Vec::new();
             let hit = bvh.intersect_visiting(
-                world.prims(),
-                &ray,
-                0.0,
-                f32::INFINITY,
+                Query::new(world.prims(), &ray, 0.0, f32::INFINITY),
                 &mut Counters::default(),
                 |v| visits.push(v),
             );
@@ -295,10 +289,7 @@ fn new_accelerators_are_recorded() {
             let ray = random_ray(&mut r, centre, size);
             let (hit, visits) = s.trace(&world, &ray, 0.0);
             let want = brute.intersect(
-                world.prims(),
-                &ray,
-                0.0,
-                f32::INFINITY,
+                Query::new(world.prims(), &ray, 0.0, f32::INFINITY),
                 &mut Counters::default(),
             );
             assert_eq!(hit.map(|h| h.prim), want.map(|h| h.prim), "{kind}");

@@ -5,7 +5,7 @@
 //! its tests.
 
 use super::testutil::{ray, soup, Rng};
-use super::{Aggregate, Brute, Bvh, Bvh8, Grid, NestedGrid, Octree, Split, Storage};
+use super::{Aggregate, Brute, Bvh, Bvh8, Grid, NestedGrid, Octree, Query, Split, Storage};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::stats::Counters;
@@ -31,6 +31,27 @@ fn every_aggregate(p: &[Primitive]) -> Vec<(&'static str, Box<dyn Aggregate>)> {
     ]
 }
 
+/// Every aggregate over nothing (the hierarchy's over an empty tree too)
+/// has empty bounds and hits nothing.
+#[test]
+fn every_aggregate_over_nothing_hits_nothing() {
+    use super::{HierarchyBvh, SceneTree};
+    let mut all = every_aggregate(&[]);
+    let tree = &SceneTree::Group(vec![]);
+    all.push((
+        "bvh-hierarchy",
+        Box::new(HierarchyBvh::new(&[], vec![], tree)),
+    ));
+    let r = &Ray::new(Vec3::ZERO, Vec3::X);
+    for (name, a) in all {
+        let mut c = Counters::default();
+        let q = Query::new(&[], r, 0.0, f32::INFINITY);
+        assert!(a.intersect(q, &mut c).is_none(), "{name}");
+        assert!(!a.occluded(q, &mut c), "{name}");
+        assert!(a.bounds().is_empty(), "{name}");
+    }
+}
+
 #[test]
 fn every_aggregate_keeps_the_trait_s_promises() {
     let prims = soup(3, 400);
@@ -54,13 +75,13 @@ fn every_aggregate_keeps_the_trait_s_promises() {
             let ray = ray(&mut r);
             let mut c = Counters::default();
             let inf = f32::INFINITY;
-            let h = a.intersect(&prims, &ray, 0.0, inf, &mut c);
-            let hb = a.intersect_barycentric(&prims, &ray, 0.0, inf, &mut c);
+            let h = a.intersect(Query::new(&prims, &ray, 0.0, inf), &mut c);
+            let hb = a.intersect_barycentric(Query::new(&prims, &ray, 0.0, inf), &mut c);
             assert_eq!(h, hb.map(|(h, _)| h), "{name}");
-            let o = a.occluded(&prims, &ray, 0.0, inf, &mut c);
+            let o = a.occluded(Query::new(&prims, &ray, 0.0, inf), &mut c);
             assert_eq!(o, h.is_some(), "{name}");
             // `u32::MAX` is no primitive: nothing may be skipped.
-            let oe = a.occluded_except(&prims, &ray, 0.0, inf, u32::MAX, &mut c);
+            let oe = a.occluded_except(Query::new(&prims, &ray, 0.0, inf), u32::MAX, &mut c);
             assert_eq!(o, oe, "{name}");
             hits += usize::from(o);
         }
@@ -85,10 +106,10 @@ fn brute_force_counts_every_test() {
             .iter()
             .position(|p| p.shape.intersect(&ray, 0.0, f32::INFINITY).is_some());
         let mut c = Counters::default();
-        brute.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+        brute.intersect(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c);
         assert_eq!(c.intersection_tests, n);
         let mut c = Counters::default();
-        let blocked = brute.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+        let blocked = brute.occluded(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c);
         assert_eq!(blocked, first.is_some());
         assert_eq!(c.intersection_tests, first.map_or(n, |i| i as u64 + 1));
     }
@@ -117,9 +138,9 @@ fn textbook_structures_report_their_layout_and_visit_to_the_same_hit() {
         let ray = ray(&mut r);
         let inf = f32::INFINITY;
         let mut c = Counters::default();
-        let want = bvh.intersect(&prims, &ray, 0.0, inf, &mut c);
+        let want = bvh.intersect(Query::new(&prims, &ray, 0.0, inf), &mut c);
         let mut entered = 0;
-        let got = bvh.intersect_visiting(&prims, &ray, 0.0, inf, &mut c, |v| {
+        let got = bvh.intersect_visiting(Query::new(&prims, &ray, 0.0, inf), &mut c, |v| {
             entered += usize::from(v.entered);
         });
         assert_eq!(got, want);
@@ -127,8 +148,8 @@ fn textbook_structures_report_their_layout_and_visit_to_the_same_hit() {
             assert!(entered > 0);
             visited_hits += 1;
         }
-        let want = grid.intersect(&prims, &ray, 0.0, inf, &mut c);
-        let got = grid.intersect_visiting(&prims, &ray, 0.0, inf, &mut c, |_| {});
+        let want = grid.intersect(Query::new(&prims, &ray, 0.0, inf), &mut c);
+        let got = grid.intersect_visiting(Query::new(&prims, &ray, 0.0, inf), &mut c, |_| {});
         assert_eq!(got, want);
     }
     assert!(visited_hits > 20);

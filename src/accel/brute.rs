@@ -1,5 +1,7 @@
-use super::{Aggregate, PrimHit};
-use crate::math::{Aabb, Ray};
+use super::mailbox::ItemTests;
+use super::overlap::bounds_of;
+use super::{Aggregate, PrimHit, Query};
+use crate::math::Aabb;
 use crate::primitive::Primitive;
 use crate::stats::Counters;
 
@@ -12,49 +14,20 @@ pub struct Brute {
 impl Brute {
     /// Over the primitives `ids` of `prims`.
     pub fn new(prims: &[Primitive], ids: Vec<u32>) -> Self {
-        let bounds = ids
-            .iter()
-            .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+        let bounds = bounds_of(prims, &ids);
         Self { ids, bounds }
     }
 }
 
 impl Aggregate for Brute {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut tmax = tmax;
-        c.intersection_tests += self.ids.len() as u64;
-        for &i in &self.ids {
-            if let Some(t) = prims[i as usize].shape.intersect(ray, tmin, tmax) {
-                tmax = t;
-                best = Some(PrimHit { t, prim: i });
-            }
-        }
-        best
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        let mut tests = ItemTests::new(q, false);
+        tests.closest(&self.ids, c);
+        tests.best()
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        for &i in &self.ids {
-            c.intersection_tests += 1;
-            if prims[i as usize].shape.intersect(ray, tmin, tmax).is_some() {
-                return true;
-            }
-        }
-        false
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        ItemTests::new(q, false).any(&self.ids, c)
     }
 
     fn bounds(&self) -> Aabb {

@@ -14,9 +14,7 @@
 //! `(tmin, tmax_then)` it finds nothing in the smaller interval now, and if it
 //! found a hit, that hit is already the best or beaten.
 
-use super::PrimHit;
-use crate::math::Ray;
-use crate::primitive::Primitive;
+use super::{PrimHit, Query};
 use crate::stats::Counters;
 
 /// Slots in the cache (a power of two). 64 × 4 bytes is one small memset per
@@ -51,76 +49,82 @@ impl Mailbox {
     }
 }
 
-/// The primitive tests of one ray walking cells or leaves front to back
-/// (grid, octree, nested grid): each cell's items, skipping those the
-/// mailbox says were tested already, one `intersection_tests` count per
-/// primitive tested.
+/// The primitive tests of one query: leaves' or cells' items, each tested
+/// at most once when mailboxing is on (cells and leaves front to back:
+/// grid, octree, nested grid), one `intersection_tests` count per
+/// primitive tested; the closest hit so far is kept across them.
 pub(crate) struct ItemTests<'a> {
-    prims: &'a [Primitive],
-    ray: &'a Ray,
-    tmin: f32,
-    seen: Mailbox,
-    mailbox: bool,
+    q: Query<'a>,
+    best: Option<PrimHit>,
+    seen: Option<Mailbox>,
 }
 
 impl<'a> ItemTests<'a> {
-    /// Tests of `ray` from `tmin` against `prims`, with mailboxing on or off.
+    /// Tests for query `q`, with mailboxing on or off.
     #[inline]
-    pub(crate) fn new(prims: &'a [Primitive], ray: &'a Ray, tmin: f32, mailbox: bool) -> Self {
+    pub(crate) fn new(q: Query<'a>, mailbox: bool) -> Self {
         Self {
-            prims,
-            ray,
-            tmin,
-            seen: Mailbox::new(),
-            mailbox,
+            q,
+            best: None,
+            seen: mailbox.then(Mailbox::new),
         }
     }
 
     /// Whether `id` is to be tested (not skipped by the mailbox).
     #[inline]
     fn fresh(&mut self, id: u32) -> bool {
-        !self.mailbox || self.seen.first_visit(id)
+        self.seen.as_mut().is_none_or(|m| m.first_visit(id))
     }
 
-    /// Whether an item of `items` lies on the ray before `tmax` (stops at
-    /// the first).
+    /// Whether an item of `items` lies on the ray in the query's range
+    /// (stops at the first).
     #[inline]
-    pub(crate) fn any(&mut self, items: &[u32], tmax: f32, c: &mut Counters) -> bool {
+    pub(crate) fn any(&mut self, items: &[u32], c: &mut Counters) -> bool {
         items.iter().any(|&id| {
             if !self.fresh(id) {
                 return false;
             }
             c.intersection_tests += 1;
-            self.prims[id as usize]
-                .shape
-                .intersect(self.ray, self.tmin, tmax)
-                .is_some()
+            self.q.hit(id).is_some()
         })
     }
 
-    /// Tests `items` against the best hit so far (`best`, at `t_best`, the
-    /// query's `tmax` while there is none), keeping the closer.
+    /// Tests `items` against the best hit so far, keeping the closer (the
+    /// range's end shrinks to it).
     #[inline]
-    pub(crate) fn closest(
-        &mut self,
-        items: &[u32],
-        best: &mut Option<PrimHit>,
-        t_best: &mut f32,
-        c: &mut Counters,
-    ) {
+    pub(crate) fn closest(&mut self, items: &[u32], c: &mut Counters) {
         for &id in items {
             if !self.fresh(id) {
                 continue;
             }
             c.intersection_tests += 1;
-            if let Some(t) = self.prims[id as usize]
-                .shape
-                .intersect(self.ray, self.tmin, *t_best)
-            {
-                *t_best = t;
-                *best = Some(PrimHit { t, prim: id });
+            if let Some(t) = self.q.hit(id) {
+                self.q.tmax = t;
+                self.best = Some(PrimHit { t, prim: id });
             }
         }
+    }
+
+    /// [`closest`](Self::closest) on the items of a cell the ray leaves at
+    /// `t_exit`; true once the best hit is accepted (it lies within the
+    /// cell: nothing in a later cell can be closer).
+    #[inline]
+    pub(crate) fn closest_in(&mut self, items: &[u32], t_exit: f32, c: &mut Counters) -> bool {
+        self.closest(items, c);
+        self.q.tmax <= t_exit
+    }
+
+    /// The upper end of the range still searched: the best hit's `t`, or
+    /// the query's `tmax` while there is none.
+    #[inline]
+    pub(crate) fn t_best(&self) -> f32 {
+        self.q.tmax
+    }
+
+    /// The closest hit found.
+    #[inline]
+    pub(crate) fn best(&self) -> Option<PrimHit> {
+        self.best
     }
 }
 

@@ -67,18 +67,50 @@ pub struct PrimHit {
     pub prim: u32,
 }
 
+/// A ray query against an aggregate: the primitives it indexes, the ray,
+/// and the open range `(tmin, tmax)` a hit must lie in.
+#[derive(Clone, Copy, Debug)]
+pub struct Query<'a> {
+    /// The world's primitive list (aggregates hold indices into it).
+    pub prims: &'a [Primitive],
+    /// The ray.
+    pub ray: &'a Ray,
+    /// Hits lie beyond this.
+    pub tmin: f32,
+    /// Hits lie before this.
+    pub tmax: f32,
+}
+
+impl<'a> Query<'a> {
+    /// `ray` against `prims` in `(tmin, tmax)`.
+    pub fn new(prims: &'a [Primitive], ray: &'a Ray, tmin: f32, tmax: f32) -> Self {
+        Self {
+            prims,
+            ray,
+            tmin,
+            tmax,
+        }
+    }
+
+    /// The same query up to `tmax`.
+    pub fn until(self, tmax: f32) -> Self {
+        Self { tmax, ..self }
+    }
+
+    /// Whether primitive `id` lies on the ray in `(tmin, tmax)`, and where.
+    #[inline]
+    pub(crate) fn hit(&self, id: u32) -> Option<f32> {
+        self.prims[id as usize]
+            .shape
+            .intersect(self.ray, self.tmin, self.tmax)
+    }
+}
+
 /// A structure over (a subset of) the world's primitives. The primitives are
 /// passed in rather than owned so that every aggregate indexes the same list.
 pub trait Aggregate: Send + Sync {
-    /// Closest hit with `tmin < t < tmax`.
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        counters: &mut Counters,
-    ) -> Option<PrimHit>;
+    /// Closest hit of query `q`.
+    fn intersect(&self, q: Query, counters: &mut Counters) -> Option<PrimHit>;
 
     /// [`intersect`](Self::intersect), with the barycentrics of the hit
     /// when it is a triangle and the aggregate's own test produced them
@@ -88,42 +120,23 @@ pub trait Aggregate: Send + Sync {
     /// instead of re-running the test. The default has none.
     fn intersect_barycentric(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         counters: &mut Counters,
     ) -> Option<(PrimHit, Option<[f32; 3]>)> {
-        self.intersect(prims, ray, tmin, tmax, counters)
-            .map(|h| (h, None))
+        self.intersect(q, counters).map(|h| (h, None))
     }
 
-    /// Whether anything lies on the ray with `tmin < t < tmax` (stops at the
+    /// Whether anything lies on the ray of `q` in its range (stops at the
     /// first hit: shadow rays need no closest hit).
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        counters: &mut Counters,
-    ) -> bool;
+    fn occluded(&self, q: Query, counters: &mut Counters) -> bool;
 
     /// [`occluded`](Self::occluded) for a ray that primitive `except`
     /// cannot block (a flat primitive the ray leaves: see
     /// `World::occluded_leaving`), so an aggregate may skip testing it. The
     /// default tests it anyway, which gives the same answer.
-    fn occluded_except(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        except: u32,
-        counters: &mut Counters,
-    ) -> bool {
+    fn occluded_except(&self, q: Query, except: u32, counters: &mut Counters) -> bool {
         let _ = except;
-        self.occluded(prims, ray, tmin, tmax, counters)
+        self.occluded(q, counters)
     }
 
     /// Bounds of everything inside.

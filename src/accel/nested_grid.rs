@@ -31,8 +31,8 @@
 use super::grid::build::{box_entries, fill, fit_entries, resolution_with};
 use super::grid::{CellWalk, Face, Lattice};
 use super::mailbox::ItemTests;
-use super::overlap::{margin, padded};
-use super::{Aggregate, PrimHit};
+use super::overlap::{bounds_of, covering, padded};
+use super::{Aggregate, PrimHit, Query};
 use crate::math::{Aabb, Ray};
 use crate::primitive::Primitive;
 use crate::stats::Counters;
@@ -70,15 +70,8 @@ impl NestedGrid {
     /// than `threshold` primitives get a finer grid, at most `depth` levels
     /// below the coarse one.
     pub fn new(prims: &[Primitive], ids: Vec<u32>, threshold: u32, depth: u32) -> Self {
-        let bounds = ids
-            .iter()
-            .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
-        let m = margin(&bounds);
-        let region = if bounds.is_empty() {
-            bounds
-        } else {
-            padded(&bounds, m)
-        };
+        let bounds = bounds_of(prims, &ids);
+        let (region, m) = covering(&bounds);
         let b = Builder {
             prims,
             margin: m,
@@ -166,23 +159,15 @@ impl NestedGrid {
     /// the traversal views record.
     pub fn intersect_visiting(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
         mut visit: impl FnMut(&CellVisit),
     ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut t_best = tmax;
-        let mut tests = ItemTests::new(prims, ray, tmin, true);
-        let test = &mut |items: &[u32], t_exit: f32, c: &mut Counters| {
-            tests.closest(items, &mut best, &mut t_best, c);
-            // Accepted only now: nothing in a later cell can be closer.
-            t_best <= t_exit
-        };
-        Self::walk(&self.top, ray, tmin, tmax, c, test, &mut visit);
-        best
+        let mut tests = ItemTests::new(q, true);
+        let test =
+            &mut |items: &[u32], t_exit: f32, c: &mut Counters| tests.closest_in(items, t_exit, c);
+        Self::walk(&self.top, q.ray, q.tmin, q.tmax, c, test, &mut visit);
+        tests.best()
     }
 }
 
@@ -292,28 +277,14 @@ fn level_bytes(l: &Level) -> usize {
 }
 
 impl Aggregate for NestedGrid {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        self.intersect_visiting(q, c, |_| {})
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        let mut tests = ItemTests::new(prims, ray, tmin, true);
-        let visit = &mut |items: &[u32], _, c: &mut Counters| tests.any(items, tmax, c);
-        Self::walk(&self.top, ray, tmin, tmax, c, visit, &mut |_| {})
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        let mut tests = ItemTests::new(q, true);
+        let visit = &mut |items: &[u32], _, c: &mut Counters| tests.any(items, c);
+        Self::walk(&self.top, q.ray, q.tmin, q.tmax, c, visit, &mut |_| {})
     }
 
     fn bounds(&self) -> Aabb {
@@ -375,8 +346,8 @@ mod tests {
         let mut with = Counters::default();
         let mut without = Counters::default();
         let r = Ray::new(Vec3::new(0.035, 0.035, -1.0), Vec3::Z);
-        let a = g.intersect(&prims, &r, 0.0, f32::INFINITY, &mut with);
-        let b = none.intersect(&prims, &r, 0.0, f32::INFINITY, &mut without);
+        let a = g.intersect(Query::new(&prims, &r, 0.0, f32::INFINITY), &mut with);
+        let b = none.intersect(Query::new(&prims, &r, 0.0, f32::INFINITY), &mut without);
         assert_eq!(a, b);
         assert!(with.intersection_tests < without.intersection_tests);
         assert_agrees(&g, &prims, 2000);
@@ -527,8 +498,10 @@ mod tests {
                 let mut seen = Vec::new();
                 let mut c = Counters::default();
                 let got =
-                    g.intersect_visiting(&prims, &q, 0.0, f32::INFINITY, &mut c, |v| seen.push(*v));
-                let want = g.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c);
+                    g.intersect_visiting(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c, |v| {
+                        seen.push(*v)
+                    });
+                let want = g.intersect(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c);
                 assert_eq!(got, want);
                 for w in seen.windows(2) {
                     if w[0].finer {
@@ -543,15 +516,5 @@ mod tests {
             }
         }
         assert!(finer_seen > 10, "{finer_seen}");
-    }
-
-    #[test]
-    fn empty_is_empty() {
-        let g = NestedGrid::new(&[], vec![], 16, 2);
-        let r = Ray::new(Vec3::ZERO, Vec3::X);
-        assert!(g
-            .intersect(&[], &r, 0.0, f32::INFINITY, &mut Counters::default())
-            .is_none());
-        assert!(g.bounds().is_empty());
     }
 }

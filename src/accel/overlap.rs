@@ -2,6 +2,7 @@
 //! octree children, and the padding margin every accelerator applies.
 
 use crate::math::{Aabb, Vec3};
+use crate::primitive::Primitive;
 use crate::shape::{Shape, Sphere};
 
 /// The padding, in world units, added around primitive boxes and cells.
@@ -24,6 +25,24 @@ pub(crate) fn margin(bounds: &Aabb) -> f32 {
 /// `b` grown by `m` on every side.
 pub(crate) fn padded(b: &Aabb, m: f32) -> Aabb {
     Aabb::new(b.min - Vec3::splat(m), b.max + Vec3::splat(m))
+}
+
+/// The union of the boxes of the primitives `ids` of `prims`.
+pub(crate) fn bounds_of(prims: &[Primitive], ids: &[u32]) -> Aabb {
+    ids.iter()
+        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()))
+}
+
+/// What a cell structure over primitives whose union box is `bounds`
+/// covers: `bounds` padded by its [`margin`] (an empty box stays empty);
+/// and the margin.
+pub(crate) fn covering(bounds: &Aabb) -> (Aabb, f32) {
+    let m = margin(bounds);
+    if bounds.is_empty() {
+        (*bounds, m)
+    } else {
+        (padded(bounds, m), m)
+    }
 }
 
 /// Whether two (closed) boxes share a point.
@@ -125,28 +144,45 @@ mod tests {
         }
     }
 
+    /// Triangles against the unit box, with whether they touch it.
     #[test]
-    fn diagonal_triangle_misses_a_corner_box_its_bounds_cover() {
-        // Triangle near the plane x + y = 4 spans [0,4]² but misses [0,1]².
-        let t = [
-            Vec3::new(4.0, 0.0, 0.0),
-            Vec3::new(0.0, 4.0, 0.0),
-            Vec3::new(0.0, 4.0, 1.0),
+    fn triangles_against_the_unit_box() {
+        let v = |x, y, z| Vec3::new(x, y, z);
+        let cases = [
+            // Near the plane x + y = 4: its bounds span [0,4]², it misses [0,1]².
+            (
+                "diagonal",
+                [v(4.0, 0.0, 0.0), v(0.0, 4.0, 0.0), v(0.0, 4.0, 1.0)],
+                false,
+            ),
+            (
+                "near the corner",
+                [v(1.5, 0.0, 0.5), v(0.0, 1.5, 0.5), v(0.0, 0.0, 0.5)],
+                true,
+            ),
+            (
+                "in a face",
+                [v(0.2, 0.2, 1.0), v(0.8, 0.2, 1.0), v(0.2, 0.8, 1.0)],
+                true,
+            ),
+            // The plane x + y + z = 3.5 passes beyond the corner (1,1,1).
+            (
+                "separated by its plane",
+                [v(3.5, 0.0, 0.0), v(0.0, 3.5, 0.0), v(0.0, 0.0, 3.5)],
+                false,
+            ),
         ];
-        assert!(!triangle_box(t, &unit_box()));
-        let near = [
-            Vec3::new(1.5, 0.0, 0.5),
-            Vec3::new(0.0, 1.5, 0.5),
-            Vec3::new(0.0, 0.0, 0.5),
-        ];
-        assert!(triangle_box(near, &unit_box()));
+        for (name, t, touches) in cases {
+            assert_eq!(triangle_box(t, &unit_box()), touches, "{name}");
+        }
     }
 
     #[test]
     fn transformed_triangle_uses_its_world_vertices() {
         use crate::math::Mat4;
         use crate::shape::{Transformed, Triangle};
-        // The object triangle of the test above, moved by a translation.
+        // The diagonal triangle of `triangles_against_the_unit_box`, as an
+        // object triangle moved by a translation.
         let m = Mat4::from_translation(Vec3::new(1.0, 1.0, 0.0));
         let t = Triangle::new(
             Vec3::new(3.0, -1.0, -1.0),
@@ -156,27 +192,6 @@ mod tests {
         let x = Shape::Transformed(Box::new(Transformed::new(Shape::Triangle(t), m).unwrap()));
         assert!(boxes_overlap(&x.bounds(), &unit_box()));
         assert!(!shape_overlaps(&x, &unit_box()));
-    }
-
-    #[test]
-    fn triangle_in_a_face_touches() {
-        let t = [
-            Vec3::new(0.2, 0.2, 1.0),
-            Vec3::new(0.8, 0.2, 1.0),
-            Vec3::new(0.2, 0.8, 1.0),
-        ];
-        assert!(triangle_box(t, &unit_box()));
-    }
-
-    #[test]
-    fn triangle_separated_by_its_plane() {
-        // Plane x + y + z = 3.5 passes beyond the corner (1,1,1).
-        let t = [
-            Vec3::new(3.5, 0.0, 0.0),
-            Vec3::new(0.0, 3.5, 0.0),
-            Vec3::new(0.0, 0.0, 3.5),
-        ];
-        assert!(!triangle_box(t, &unit_box()));
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! the tests' one generator, [`crate::testutil::Rng`]) and a comparison
 //! with brute force.
 
-use super::{Aggregate, Brute};
+use super::{Aggregate, Brute, Query};
 use crate::math::{Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::shape::{Shape, Sphere, Triangle};
@@ -97,8 +97,8 @@ pub(crate) fn assert_agrees_on(
     let mut c = Counters::default();
     let mut cb = Counters::default();
     for (i, (ray, tmin, tmax)) in queries.into_iter().enumerate() {
-        let want = brute.intersect(prims, &ray, tmin, tmax, &mut cb);
-        let got = accel.intersect(prims, &ray, tmin, tmax, &mut c);
+        let want = brute.intersect(Query::new(prims, &ray, tmin, tmax), &mut cb);
+        let got = accel.intersect(Query::new(prims, &ray, tmin, tmax), &mut c);
         match (want, got) {
             (None, None) => {}
             (Some(w), Some(g)) => assert!(
@@ -111,10 +111,38 @@ pub(crate) fn assert_agrees_on(
             ),
         }
         assert_eq!(
-            brute.occluded(prims, &ray, tmin, tmax, &mut cb),
-            accel.occluded(prims, &ray, tmin, tmax, &mut c),
+            brute.occluded(Query::new(prims, &ray, tmin, tmax), &mut cb),
+            accel.occluded(Query::new(prims, &ray, tmin, tmax), &mut c),
             "ray {i}"
         );
     }
     c
+}
+
+/// `n` triangles at x = 1.2^k, all of one shape across the x axis (each
+/// covers y + z ≥ 1/2 of its box): binned over the whole range, every
+/// split peels off the few largest, so the BVH over them is a chain as
+/// deep as the builder goes.
+pub(crate) fn chain(n: i32) -> Vec<Primitive> {
+    (0..n)
+        .map(|k| {
+            let x = 1.2f32.powi(k);
+            let v = |y: f32, z: f32| Vec3::new(x, y, z);
+            prim(Shape::Triangle(Triangle::new(
+                v(-0.5, 1.0),
+                v(1.0, 1.0),
+                v(1.0, -0.5),
+            )))
+        })
+        .collect()
+}
+
+/// The closest hit of `ray` in `(0, ∞)` that `a` finds among `prims`.
+pub(crate) fn first_hit(
+    a: &impl Aggregate,
+    prims: &[Primitive],
+    ray: &Ray,
+) -> Option<super::PrimHit> {
+    let q = Query::new(prims, ray, 0.0, f32::INFINITY);
+    a.intersect(q, &mut Counters::default())
 }

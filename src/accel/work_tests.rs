@@ -6,7 +6,7 @@
 //! not.
 
 use super::testutil::{ray, soup, terrain, terrain_ray, Rng};
-use super::{Aggregate, Bvh, Grid, NestedGrid, Octree, Split, Storage};
+use super::{Aggregate, Bvh, Grid, NestedGrid, Octree, Query, Split, Storage};
 use crate::stats::Counters;
 
 /// Nodes (or cells) visited and primitive tests per ray pair (closest and
@@ -60,8 +60,8 @@ fn every_accelerator_s_work_per_ray_stays_where_it_was_measured() {
                 } else {
                     terrain_ray(&mut r)
                 };
-                acc.intersect(p, &ray, 0.0, f32::INFINITY, &mut c);
-                acc.occluded(p, &ray, 0.0, f32::INFINITY, &mut c);
+                acc.intersect(Query::new(p, &ray, 0.0, f32::INFINITY), &mut c);
+                acc.occluded(Query::new(p, &ray, 0.0, f32::INFINITY), &mut c);
             }
             let nodes = c.nodes_visited as f64 / rays as f64;
             let tests = c.intersection_tests as f64 / rays as f64;

@@ -232,6 +232,26 @@ pub(crate) fn decode<'a>(bytes: &'a [u8], file: &Path) -> Result<&'a str, ParseE
     })
 }
 
+/// The whitespace-separated words of a line with their 1-based columns.
+pub(crate) fn words(line: &str) -> Vec<(usize, &str)> {
+    let mut out = Vec::new();
+    let mut start: Option<(usize, usize)> = None;
+    for (col, (i, c)) in line.char_indices().enumerate() {
+        match (c.is_whitespace(), start) {
+            (true, Some((s, sc))) => {
+                out.push((sc, &line[s..i]));
+                start = None;
+            }
+            (false, None) => start = Some((i, col + 1)),
+            _ => {}
+        }
+    }
+    if let Some((s, sc)) = start {
+        out.push((sc, &line[s..]));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,7 +13,7 @@
 //! the surface stays watertight. A file mixing corners with and without
 //! normals is read flat.
 
-use super::diagnostic::{decode, quote, ParseError};
+use super::diagnostic::{decode, quote, words, ParseError};
 use crate::limits::{MAX_FACE_CORNERS, MAX_OBJ_LINE_BYTES};
 use crate::math::Vec3;
 use crate::scene::Mesh;
@@ -394,26 +394,6 @@ fn check_corner(word: &str, counts: &Counts) -> Result<(), String> {
 /// The first word of a line.
 fn first_word(line: &str) -> Option<&str> {
     line.split_whitespace().next()
-}
-
-/// The whitespace-separated words of a line with their 1-based columns.
-fn words(line: &str) -> Vec<(usize, &str)> {
-    let mut out = Vec::new();
-    let mut start: Option<(usize, usize)> = None;
-    for (col, (i, c)) in line.char_indices().enumerate() {
-        match (c.is_whitespace(), start) {
-            (true, Some((s, sc))) => {
-                out.push((sc, &line[s..i]));
-                start = None;
-            }
-            (false, None) => start = Some((i, col + 1)),
-            _ => {}
-        }
-    }
-    if let Some((s, sc)) = start {
-        out.push((sc, &line[s..]));
-    }
-    out
 }
 
 #[cfg(test)]

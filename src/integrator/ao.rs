@@ -3,12 +3,10 @@
 //! [`AmbientOcclusion`]) and by [`super::Whitted`] as a factor on the Phong
 //! ambient term.
 
-use super::{Integrator, RayKind, RayObserver};
+use super::{Branch, Integrator, RayKind, RayObserver, Trace};
 pub use crate::math::warp::cosine_hemisphere;
 use crate::math::{Ray, SurfacePoint, Vec3};
-use crate::sampler::SampleStream;
-use crate::stats::Counters;
-use crate::world::{Hit, World};
+use crate::world::Hit;
 
 /// How ambient occlusion is estimated.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,34 +30,26 @@ impl Default for AoSettings {
 /// Fraction of `ao.samples` cosine-weighted rays from the surface point
 /// `from` (unit normal `n` facing the side to test), spawned clear of its
 /// error bound at instant `time`, that meet nothing within `ao.distance`: the
-/// estimate of `(1/π) ∫ V(ω) cos θ dω`, which is 1 on an open plane.
-#[allow(clippy::too_many_arguments)]
-pub fn unoccluded(
-    world: &World,
+/// estimate of `(1/π) ∫ V(ω) cos θ dω`, which is 1 on an open plane. The
+/// rays are at recursion `depth`.
+pub fn unoccluded<O: RayObserver>(
+    cx: &mut Trace<O>,
     from: &SurfacePoint,
     n: Vec3,
     time: f32,
     ao: &AoSettings,
     depth: u32,
-    stream: &mut SampleStream,
-    c: &mut Counters,
-    obs: &mut impl RayObserver,
 ) -> f32 {
     let k = ao.samples.max(1);
     let mut open = 0u32;
-    for u in stream.split_2d(k) {
+    for u in cx.stream.split_2d(k) {
         let w = cosine_hemisphere(n, u);
         let ray = from.spawn_ray(w).at_time(time);
-        super::count_ray(c, RayKind::Occlusion);
-        let blocked = world.occluded(&ray, 0.0, ao.distance, c);
-        obs.ray(
-            RayKind::Occlusion,
-            &ray,
-            if blocked { f32::NAN } else { ao.distance },
-            depth,
-            0.0,
-            None,
-        );
+        super::count_ray(cx.counters, RayKind::Occlusion);
+        let blocked = cx.world.occluded(&ray, 0.0, ao.distance, cx.counters);
+        let t_end = if blocked { f32::NAN } else { ao.distance };
+        let b = Branch::probe(RayKind::Occlusion, depth);
+        cx.observer.ray(b, &ray, t_end, None);
         open += u32::from(!blocked);
     }
     open as f32 / k as f32
@@ -74,26 +64,8 @@ pub struct AmbientOcclusion {
 }
 
 impl Integrator for AmbientOcclusion {
-    fn li(
-        &self,
-        world: &World,
-        ray: &Ray,
-        tmin: f32,
-        stream: &mut SampleStream,
-        counters: &mut Counters,
-        observer: &mut impl RayObserver,
-    ) -> (Vec3, Option<Hit>) {
-        super::count_ray(counters, RayKind::Primary);
-        let hit = world.intersect(ray, tmin, f32::INFINITY, counters);
-        observer.ray(
-            RayKind::Primary,
-            ray,
-            hit.map_or(f32::INFINITY, |h| h.t),
-            0,
-            1.0,
-            hit.map(|h| h.normal),
-        );
-        let Some(h) = hit else {
+    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
+        let Some(h) = cx.closest(ray, tmin, Branch::CAMERA) else {
             return (Vec3::ONE, None);
         };
         // Both sides of a surface are tested: the one the ray sees.
@@ -102,17 +74,7 @@ impl Integrator for AmbientOcclusion {
         } else {
             h.normal
         };
-        let f = unoccluded(
-            world,
-            &h.surface_point(),
-            n,
-            ray.time,
-            &self.settings,
-            0,
-            stream,
-            counters,
-            observer,
-        );
+        let f = unoccluded(cx, &h.surface_point(), n, ray.time, &self.settings, 0);
         (Vec3::splat(f), Some(h))
     }
 }

@@ -12,7 +12,7 @@ mod whitted;
 
 pub use ao::{AmbientOcclusion, AoSettings};
 pub use kind::IntegratorKind;
-pub use observer::{NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
+pub use observer::{Branch, NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
 pub use path::{LightChoice, PathSettings, PathTracer, Strategy};
 pub use whitted::Whitted;
 
@@ -33,50 +33,63 @@ pub(crate) fn count_ray(c: &mut Counters, kind: RayKind) {
     }
 }
 
+/// What every ray of one camera sample is traced with: the world, the
+/// sample's [`SampleStream`] (already past the pixel position: every random
+/// decision, light point, lens, time, glossy lobe or hemisphere, takes its
+/// next dimension, so stratification reaches every effect and the image
+/// stays independent of threads and tiles), the counters and the observer.
+pub struct Trace<'a, 's, O> {
+    /// The scene.
+    pub world: &'a World,
+    /// The camera sample's stream.
+    pub stream: &'a mut SampleStream<'s>,
+    /// Statistics.
+    pub counters: &'a mut Counters,
+    /// Told every ray traced.
+    pub observer: &'a mut O,
+}
+
+impl<O: RayObserver> Trace<'_, '_, O> {
+    /// The closest hit of `ray` beyond `tmin`, the ray counted and shown to
+    /// the observer as one at branch `b`.
+    #[inline]
+    pub fn closest(&mut self, ray: &Ray, tmin: f32, b: Branch) -> Option<Hit> {
+        count_ray(self.counters, b.kind);
+        let hit = self
+            .world
+            .intersect(ray, tmin, f32::INFINITY, self.counters);
+        let t_end = hit.map_or(f32::INFINITY, |h| h.t);
+        let normal = hit.map(|h| h.normal);
+        self.observer.ray(b, ray, t_end, normal);
+        hit
+    }
+
+    /// Whether something blocks the shadow ray `ray` before `tmax`, but
+    /// primitive `leaving` (the one it leaves, when known; see
+    /// `World::occluded_leaving`); counted and shown to the observer as a
+    /// shadow ray at recursion `depth`.
+    #[inline]
+    pub fn blocked(&mut self, ray: &Ray, tmax: f32, leaving: Option<u32>, depth: u32) -> bool {
+        count_ray(self.counters, RayKind::Shadow);
+        let blocked = (self.world).occluded_leaving(ray, 0.0, tmax, leaving, self.counters);
+        self.observer.shadow(ray, tmax, blocked, depth);
+        blocked
+    }
+}
+
 /// Radiance along camera rays: the one interface between the render loop and
 /// the light transport.
-///
-/// `stream` is the camera sample's [`SampleStream`], already past the pixel
-/// position: every random decision (light point, lens, time, glossy lobe,
-/// hemisphere) takes its next dimension, so stratification reaches every
-/// effect and the image stays independent of threads and tiles.
 pub trait Integrator: Sync {
     /// Colour seen along the camera ray `ray` (hits with `t > tmin`), and the
     /// camera ray's hit (for the depth and normal planes).
-    fn li(
-        &self,
-        world: &World,
-        ray: &Ray,
-        tmin: f32,
-        stream: &mut SampleStream,
-        counters: &mut Counters,
-        observer: &mut impl RayObserver,
-    ) -> (Vec3, Option<Hit>);
+    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>);
 }
 
 impl Integrator for Whitted {
     /// The classic tree takes no stream dimensions; area lights, glossy
     /// lobes and ambient occlusion take theirs as they are met.
     #[inline]
-    fn li(
-        &self,
-        world: &World,
-        ray: &Ray,
-        tmin: f32,
-        stream: &mut SampleStream,
-        counters: &mut Counters,
-        observer: &mut impl RayObserver,
-    ) -> (Vec3, Option<Hit>) {
-        self.trace_sampled(
-            world,
-            ray,
-            tmin,
-            RayKind::Primary,
-            0,
-            1.0,
-            stream,
-            counters,
-            observer,
-        )
+    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
+        self.trace_sampled(cx, ray, tmin, Branch::CAMERA)
     }
 }

@@ -15,21 +15,46 @@ pub enum RayKind {
     Occlusion,
 }
 
+/// A ray's place in the ray tree: its role, its recursion depth (0 for a
+/// camera ray) and its contribution to the pixel (for pruning and the
+/// observer).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Branch {
+    /// The ray's role.
+    pub kind: RayKind,
+    /// Recursion depth.
+    pub depth: u32,
+    /// Contribution (max channel of the path's weight).
+    pub weight: f32,
+}
+
+impl Branch {
+    /// A camera ray.
+    pub const CAMERA: Branch = Branch {
+        kind: RayKind::Primary,
+        depth: 0,
+        weight: 1.0,
+    };
+
+    /// A ray of `kind` at recursion `depth` that carries no colour of its
+    /// own (a shadow or occlusion probe).
+    pub fn probe(kind: RayKind, depth: u32) -> Branch {
+        Branch {
+            kind,
+            depth,
+            weight: 0.0,
+        }
+    }
+}
+
 /// Watches the rays an integrator spawns. Rendering passes [`NoObserver`],
 /// whose empty inline method compiles away; the ray-tree view passes a
 /// recorder, so the picture shows exactly what the renderer did.
 pub trait RayObserver {
-    /// A ray was traced from `ray.origin` to `ray.at(t_end)` (`t_end` is
-    /// infinite for a miss) at recursion `depth` with contribution `weight`.
-    fn ray(
-        &mut self,
-        kind: RayKind,
-        ray: &Ray,
-        t_end: f32,
-        depth: u32,
-        weight: f32,
-        normal: Option<Vec3>,
-    );
+    /// A ray at branch `b` of the tree was traced from `ray.origin` to
+    /// `ray.at(t_end)` (`t_end` is infinite for a miss), meeting a surface
+    /// of normal `normal`.
+    fn ray(&mut self, b: Branch, ray: &Ray, t_end: f32, normal: Option<Vec3>);
 
     /// An opaque shadow ray towards a light `distance` away was traced, and
     /// `blocked` tells whether something lay in between. The default reports
@@ -37,7 +62,7 @@ pub trait RayObserver {
     /// blocked (an any-hit query does not say where).
     fn shadow(&mut self, ray: &Ray, distance: f32, blocked: bool, depth: u32) {
         let t_end = if blocked { f32::NAN } else { distance };
-        self.ray(RayKind::Shadow, ray, t_end, depth, 0.0, None);
+        self.ray(Branch::probe(RayKind::Shadow, depth), ray, t_end, None);
     }
 
     /// The ray reported last carried light to the path: a light sample's
@@ -56,7 +81,7 @@ pub struct NoObserver;
 
 impl RayObserver for NoObserver {
     #[inline(always)]
-    fn ray(&mut self, _: RayKind, _: &Ray, _: f32, _: u32, _: f32, _: Option<Vec3>) {}
+    fn ray(&mut self, _: Branch, _: &Ray, _: f32, _: Option<Vec3>) {}
 
     #[inline(always)]
     fn shadow(&mut self, _: &Ray, _: f32, _: bool, _: u32) {}
@@ -97,22 +122,14 @@ pub struct RayRecorder {
 }
 
 impl RayObserver for RayRecorder {
-    fn ray(
-        &mut self,
-        kind: RayKind,
-        ray: &Ray,
-        t_end: f32,
-        depth: u32,
-        weight: f32,
-        normal: Option<Vec3>,
-    ) {
+    fn ray(&mut self, b: Branch, ray: &Ray, t_end: f32, normal: Option<Vec3>) {
         self.rays.push(RecordedRay {
-            kind,
+            kind: b.kind,
             ray: *ray,
             t_end,
             occluded: false,
-            depth,
-            weight,
+            depth: b.depth,
+            weight: b.weight,
             normal,
             light: None,
         });
@@ -147,8 +164,8 @@ mod tests {
     struct Rays(Vec<(RayKind, f32, u32)>);
 
     impl RayObserver for Rays {
-        fn ray(&mut self, kind: RayKind, _: &Ray, t_end: f32, depth: u32, _: f32, _: Option<Vec3>) {
-            self.0.push((kind, t_end, depth));
+        fn ray(&mut self, b: Branch, _: &Ray, t_end: f32, _: Option<Vec3>) {
+            self.0.push((b.kind, t_end, b.depth));
         }
     }
 

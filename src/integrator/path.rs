@@ -39,17 +39,15 @@
 //! (β: the path's throughput), at most 0.95, and divides the survivors by
 //! the survival probability: unbiased.
 
-use super::{count_ray, Integrator, RayKind, RayObserver};
+use super::{Branch, Integrator, RayKind, RayObserver, Trace};
 use crate::bsdf::Bsdf;
 use crate::light::{incident, LightPoint};
 use crate::material::{eval, TextureSpace};
 
 use crate::math::warp::uniform_triangle;
 use crate::math::{Ray, Spawn, SurfacePoint, Vec2, Vec3, SHADOW_EPSILON};
-use crate::sampler::SampleStream;
 use crate::scene::{Light, Material, Phong};
 use crate::shape::Shape;
-use crate::stats::Counters;
 use crate::world::{Hit, World};
 use std::f32::consts::{PI, TAU};
 
@@ -466,25 +464,19 @@ impl PathTracer {
 
 /// Whether the shadow ray from `from` to a light sample's target is
 /// blocked (counted and shown to the observer as a shadow ray).
-fn occluded(
-    world: &World,
+fn occluded<O: RayObserver>(
+    cx: &mut Trace<O>,
     from: &mut Spawn,
     target: Target,
     time: f32,
     depth: u32,
-    c: &mut Counters,
-    obs: &mut impl RayObserver,
 ) -> bool {
     let (ray, tmax) = match target {
         Target::Point(p) => (from.spawn_ray_to(p), 1.0 - SHADOW_EPSILON),
         Target::Direction(d) => (from.spawn_ray(d), f32::INFINITY),
         Target::Surface(s) => (from.spawn_ray_to_surface(&s), 1.0 - SHADOW_EPSILON),
     };
-    let ray = ray.at_time(time);
-    count_ray(c, RayKind::Shadow);
-    let blocked = world.occluded_leaving(&ray, 0.0, tmax, from.leaving, c);
-    obs.shadow(&ray, tmax, blocked, depth);
-    blocked
+    cx.blocked(&ray.at_time(time), tmax, from.leaving, depth)
 }
 
 /// The density per unit solid angle of [`sample_sphere_cone`] from `p`
@@ -534,15 +526,13 @@ fn sample_sphere_cone(p: Vec3, center: Vec3, radius: f32, u: Vec2) -> Option<Sur
 }
 
 impl Integrator for PathTracer {
-    fn li(
+    fn li<O: RayObserver>(
         &self,
-        world: &World,
+        cx: &mut Trace<O>,
         camera_ray: &Ray,
         tmin: f32,
-        stream: &mut SampleStream,
-        counters: &mut Counters,
-        observer: &mut impl RayObserver,
     ) -> (Vec3, Option<Hit>) {
+        let world = cx.world;
         let s = &self.settings;
         let background = world.background().color;
         let mut radiance = Vec3::ZERO;
@@ -556,15 +546,15 @@ impl Integrator for PathTracer {
         let mut prev: Option<(Vec3, f32, bool)> = None;
         let mut depth = 0u32;
         loop {
-            count_ray(counters, kind);
-            let hit = world.intersect(&ray, ray_tmin, f32::INFINITY, counters);
-            observer.ray(
-                kind,
+            let weight = beta.max_element();
+            let hit = cx.closest(
                 &ray,
-                hit.map_or(f32::INFINITY, |h| h.t),
-                depth,
-                beta.max_element(),
-                hit.map(|h| h.normal),
+                ray_tmin,
+                Branch {
+                    kind,
+                    depth,
+                    weight,
+                },
             );
             // The scene's area lights: emitting surfaces that do not block
             // (shadow rays pass through them too), crossed before the hit.
@@ -589,13 +579,13 @@ impl Integrator for PathTracer {
                     }
                 };
                 radiance += beta * eh.le * w;
-                observer.light(w, beta * eh.le * w);
+                cx.observer.light(w, beta * eh.le * w);
             }
             let Some(h) = hit else {
                 // The uniform environment: found only by BSDF sampling.
                 radiance += beta * background;
                 if background != Vec3::ZERO {
-                    observer.light(1.0, beta * background);
+                    cx.observer.light(1.0, beta * background);
                 }
                 break;
             };
@@ -618,7 +608,7 @@ impl Integrator for PathTracer {
                     }
                 };
                 radiance += beta * le * w;
-                observer.light(w, beta * le * w);
+                cx.observer.light(w, beta * le * w);
             }
             if depth >= s.max_bounces {
                 break;
@@ -626,28 +616,23 @@ impl Integrator for PathTracer {
             // This vertex's dimensions, taken whether used or not, and
             // computed only where used: light choice, light point, lobe,
             // direction, roulette.
-            let dim = stream.dimension();
-            stream.skip_n(DIMS_PER_VERTEX);
+            let dim = cx.stream.dimension();
+            cx.stream.skip_n(DIMS_PER_VERTEX);
 
             let bsdf = Bsdf::from_phong(&m, h.normal);
             let wo = -ray.dir.normalize();
             let mut spawn = Spawn::leaving(h.surface_point(), h.prim);
             if s.strategy != Strategy::Bsdf && !bsdf.is_delta() {
-                if let Some((ls, choose)) =
-                    self.sample_light(world, h.point, stream.get_1d(dim), stream.get_2d(dim + 1))
-                {
+                if let Some((ls, choose)) = self.sample_light(
+                    world,
+                    h.point,
+                    cx.stream.get_1d(dim),
+                    cx.stream.get_2d(dim + 1),
+                ) {
                     let f = bsdf.f(wo, ls.wi);
                     let cos = ls.wi.dot(h.normal).abs();
                     if f != Vec3::ZERO && cos > 0.0 {
-                        let blocked = occluded(
-                            world,
-                            &mut spawn,
-                            ls.target,
-                            ray.time,
-                            depth + 1,
-                            counters,
-                            observer,
-                        );
+                        let blocked = occluded(cx, &mut spawn, ls.target, ray.time, depth + 1);
                         // The MIS weight; only light sampling finds delta
                         // lights, whose `radiance` is what arrives.
                         let w = match s.strategy {
@@ -657,7 +642,7 @@ impl Integrator for PathTracer {
                             _ => 1.0,
                         };
                         if blocked {
-                            observer.light(w, Vec3::ZERO);
+                            cx.observer.light(w, Vec3::ZERO);
                         } else {
                             let contribution = beta
                                 * if ls.pdf > 0.0 {
@@ -666,18 +651,18 @@ impl Integrator for PathTracer {
                                     f * cos * ls.radiance / choose
                                 };
                             radiance += contribution;
-                            observer.light(w, contribution);
+                            cx.observer.light(w, contribution);
                         }
                     }
                 }
             }
             // One lobe needs no choice.
             let u_lobe = if bsdf.lobes().len() > 1 {
-                stream.get_1d(dim + 2)
+                cx.stream.get_1d(dim + 2)
             } else {
                 0.0
             };
-            let Some(bs) = bsdf.sample_f(wo, u_lobe, stream.get_2d(dim + 3)) else {
+            let Some(bs) = bsdf.sample_f(wo, u_lobe, cx.stream.get_2d(dim + 3)) else {
                 break;
             };
             let weight = bs.weight(h.normal);
@@ -688,7 +673,7 @@ impl Integrator for PathTracer {
             depth += 1;
             if depth > s.rr_depth {
                 let survive = beta.max_element().min(0.95);
-                if stream.get_1d(dim + 4) >= survive {
+                if cx.stream.get_1d(dim + 4) >= survive {
                     break;
                 }
                 beta /= survive;

@@ -12,14 +12,12 @@
 
 use super::ao::{unoccluded, AoSettings};
 use super::optics::{reflect, refract};
-use super::{RayKind, RayObserver};
+use super::{Branch, RayKind, RayObserver, Trace};
 use crate::light::{is_delta, sample_light, Incident};
 use crate::material::glossy::{lobe_exponent, sample_lobe};
 use crate::material::{eval, phong_light, TextureSpace};
 use crate::math::{Ray, Spawn, SurfacePoint, Vec3, SHADOW_EPSILON};
-use crate::sampler::SampleStream;
-use crate::scene::{Light, RenderLight};
-use crate::stats::Counters;
+use crate::scene::{Light, Phong, RenderLight};
 use crate::world::{Hit, World};
 
 /// Settings of the ray tree.
@@ -65,56 +63,46 @@ impl Default for Whitted {
     }
 }
 
+/// A shaded point as its lights see it: the material, the shading and
+/// geometric normals (facing the side the ray came from), the incoming
+/// ray's unit direction and instant, and the point's depth in the tree.
+struct Shaded {
+    m: Phong,
+    n: Vec3,
+    ng: Vec3,
+    d: Vec3,
+    time: f32,
+    depth: u32,
+}
+
+/// The directions a child ray may take: around `axis` on the `side` of the
+/// surface, spread by `glossiness` (0: `axis` alone).
+struct Lobe {
+    axis: Vec3,
+    side: Vec3,
+    glossiness: f32,
+}
+
 impl Whitted {
-    /// Colour seen along `ray` (hits with `t > tmin`), a ray of role `kind`
-    /// at recursion `depth` with contribution `weight`, and the hit itself;
-    /// every random decision (light point, glossy lobe, hemisphere) takes
-    /// the next dimension of `stream`. [`Integrator::li`](super::Integrator::li)
-    /// is this for a camera ray.
-    #[allow(clippy::too_many_arguments)]
-    pub fn trace_sampled(
+    /// Colour seen along `ray` (hits with `t > tmin`), a ray at branch `b`
+    /// of the tree, and the hit itself; every random decision (light point,
+    /// glossy lobe, hemisphere) takes the next dimension of the stream.
+    /// [`Integrator::li`](super::Integrator::li) is this for a camera ray.
+    pub fn trace_sampled<O: RayObserver>(
         &self,
-        world: &World,
+        cx: &mut Trace<O>,
         ray: &Ray,
         tmin: f32,
-        kind: RayKind,
-        depth: u32,
-        weight: f32,
-        stream: &mut SampleStream,
-        c: &mut Counters,
-        obs: &mut impl RayObserver,
+        b: Branch,
     ) -> (Vec3, Option<Hit>) {
-        super::count_ray(c, kind);
-        let hit = world.intersect(ray, tmin, f32::INFINITY, c);
-        obs.ray(
-            kind,
-            ray,
-            hit.map_or(f32::INFINITY, |h| h.t),
-            depth,
-            weight,
-            hit.map(|h| h.normal),
-        );
-        match hit {
-            None => (world.background().color, None),
-            Some(h) => (
-                self.shade(world, ray, &h, depth, weight, stream, c, obs),
-                Some(h),
-            ),
+        match cx.closest(ray, tmin, b) {
+            None => (cx.world.background().color, None),
+            Some(h) => (self.shade(cx, ray, &h, b), Some(h)),
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn shade(
-        &self,
-        world: &World,
-        ray: &Ray,
-        hit: &Hit,
-        depth: u32,
-        weight: f32,
-        stream: &mut SampleStream,
-        c: &mut Counters,
-        obs: &mut impl RayObserver,
-    ) -> Vec3 {
+    fn shade<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, hit: &Hit, b: Branch) -> Vec3 {
+        let world = cx.world;
         let d = ray.dir.normalize();
         let back = hit.normal.dot(d) > 0.0;
         if back && !self.shade_back {
@@ -131,54 +119,74 @@ impl Whitted {
             (hit.shading_normal, hit.normal)
         };
         let p = hit.point;
-        let m = self.material_at(world, hit);
+        let (time, depth) = (ray.time, b.depth);
+        let at = &Shaded {
+            m: self.material_at(world, hit),
+            n,
+            ng,
+            d,
+            time,
+            depth,
+        };
+        let m = &at.m;
 
         let mut color = world.background().ambient * m.diffuse;
         if let Some(ao) = &self.ambient_occlusion {
             if color != Vec3::ZERO {
-                let from = hit.surface_point();
-                color *= unoccluded(world, &from, ng, ray.time, ao, depth, stream, c, obs);
+                color *= unoccluded(cx, &hit.surface_point(), ng, time, ao, depth);
             }
         }
         // The lights' shadow rays share their offset origins (`Spawn`).
         let from = &mut Spawn::leaving(hit.surface_point(), hit.prim);
         for (i, light) in world.lights().iter().enumerate() {
             if !is_delta(light) {
-                color +=
-                    self.area_light(world, ray, from, light, &m, n, ng, d, depth, stream, c, obs);
+                // An area light: the mean over `shadow_samples` points of
+                // it, stratified by one split dimension of the stream, each
+                // with its own shadow ray (the penumbra is the fraction of
+                // them blocked), from the hit to the sampled point with both
+                // ends offset out of their error bounds.
+                let k = self.shadow_samples.max(1);
+                let mut sum = Vec3::ZERO;
+                for u in cx.stream.split_2d(k) {
+                    let inc = sample_light(light, from.from.p, u);
+                    sum += self.lit(cx, at, from, light, &inc);
+                }
+                color += sum / k as f32;
                 continue;
             }
             let inc = world.incident(i, p);
-            color += self.lit(world, ray, from, light, &inc, &m, n, ng, d, depth, c, obs);
+            color += self.lit(cx, at, from, light, &inc);
         }
 
         if depth >= self.bounces {
             return color;
         }
-        let refl_w = weight * m.reflective.max_element();
+        // Light arriving along child rays of `kind` and `weight` around
+        // `axis`, on the `side` of the surface.
+        let child = |cx: &mut Trace<O>, axis, side, kind, weight| {
+            let lobe = Lobe {
+                axis,
+                side,
+                glossiness: m.glossiness,
+            };
+            let depth = depth + 1;
+            let b = Branch {
+                kind,
+                depth,
+                weight,
+            };
+            self.spread(cx, &hit.surface_point(), time, lobe, b)
+        };
+        let refl_w = b.weight * m.reflective.max_element();
         if refl_w > 0.0 && refl_w >= self.weight_cutoff {
             let mut r = reflect(d, n);
             if n != ng && r.dot(ng) <= 0.0 {
                 // A smooth normal would mirror the ray into the surface.
                 r = reflect(d, ng);
             }
-            let rc = self.spread(
-                world,
-                ray,
-                &hit.surface_point(),
-                r,
-                ng,
-                m.glossiness,
-                RayKind::Reflected,
-                depth,
-                refl_w,
-                stream,
-                c,
-                obs,
-            );
-            color += m.reflective * rc;
+            color += m.reflective * child(cx, r, ng, RayKind::Reflected, refl_w);
         }
-        let trans_w = weight * m.transparent.max_element();
+        let trans_w = b.weight * m.transparent.max_element();
         if trans_w > 0.0 && trans_w >= self.weight_cutoff {
             // Entering or leaving is decided by the side of the geometric normal.
             let (n_i, n_t) = if back { (m.ior, 1.0) } else { (1.0, m.ior) };
@@ -192,98 +200,41 @@ impl Whitted {
                     }
                 });
             if let Some(t) = through {
-                let tc = self.spread(
-                    world,
-                    ray,
-                    &hit.surface_point(),
-                    t,
-                    -ng,
-                    m.glossiness,
-                    RayKind::Transmitted,
-                    depth,
-                    trans_w,
-                    stream,
-                    c,
-                    obs,
-                );
-                color += m.transparent * tc;
+                color += m.transparent * child(cx, t, -ng, RayKind::Transmitted, trans_w);
             }
         }
         color
     }
 
-    /// Colour arriving along the child direction `axis` from the surface
-    /// point `from`: one ray for a mirror or clear glass (`glossiness` 0),
-    /// else the mean of rays over the glossy lobe around `axis` on the `side`
-    /// of the surface. Child rays are spawned clear of `from`'s error bound
-    /// and keep `ray`'s time.
-    #[allow(clippy::too_many_arguments)]
-    fn spread(
+    /// Colour arriving from the surface point `from` along child rays at
+    /// branch `b`: one ray along the lobe's axis for a mirror or clear glass
+    /// (`glossiness` 0), else the mean of rays over the lobe. Child rays are
+    /// spawned clear of `from`'s error bound at instant `time`.
+    fn spread<O: RayObserver>(
         &self,
-        world: &World,
-        ray: &Ray,
+        cx: &mut Trace<O>,
         from: &SurfacePoint,
-        axis: Vec3,
-        side: Vec3,
-        glossiness: f32,
-        kind: RayKind,
-        depth: u32,
-        weight: f32,
-        stream: &mut SampleStream,
-        c: &mut Counters,
-        obs: &mut impl RayObserver,
+        time: f32,
+        lobe: Lobe,
+        b: Branch,
     ) -> Vec3 {
-        if glossiness <= 0.0 {
-            let child = from.spawn_ray(axis).at_time(ray.time);
-            return self
-                .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
-                .0;
+        if lobe.glossiness <= 0.0 {
+            let child = from.spawn_ray(lobe.axis).at_time(time);
+            return self.trace_sampled(cx, &child, 0.0, b).0;
         }
-        let e = lobe_exponent(glossiness);
-        let k = if depth == 0 {
+        let e = lobe_exponent(lobe.glossiness);
+        // Many rays at a camera ray's first hit, one deeper.
+        let k = if b.depth == 1 {
             self.glossy_samples.max(1)
         } else {
             1
         };
         let mut sum = Vec3::ZERO;
-        for u in stream.split_2d(k) {
-            let w = sample_lobe(axis, side, e, u);
-            let child = from.spawn_ray(w).at_time(ray.time);
-            c.glossy += 1;
-            sum += self
-                .trace_sampled(world, &child, 0.0, kind, depth + 1, weight, stream, c, obs)
-                .0;
-        }
-        sum / k as f32
-    }
-
-    /// Light from an area light: the mean over `shadow_samples` points of it,
-    /// stratified by one split dimension of the stream, each with its own
-    /// shadow ray (the penumbra is the fraction of them blocked), from the
-    /// hit to the sampled point with both ends offset out of their error
-    /// bounds.
-    #[allow(clippy::too_many_arguments)]
-    fn area_light(
-        &self,
-        world: &World,
-        ray: &Ray,
-        from: &mut Spawn,
-        light: &RenderLight,
-        m: &crate::scene::Phong,
-        n: Vec3,
-        ng: Vec3,
-        d: Vec3,
-        depth: u32,
-        stream: &mut SampleStream,
-        c: &mut Counters,
-        obs: &mut impl RayObserver,
-    ) -> Vec3 {
-        let k = self.shadow_samples.max(1);
-        let p = from.from.p;
-        let mut sum = Vec3::ZERO;
-        for u in stream.split_2d(k) {
-            let inc = sample_light(light, p, u);
-            sum += self.lit(world, ray, from, light, &inc, m, n, ng, d, depth, c, obs);
+        for u in cx.stream.split_2d(k) {
+            let w = sample_lobe(lobe.axis, lobe.side, e, u);
+            let child = from.spawn_ray(w).at_time(time);
+            cx.counters.glossy += 1;
+            sum += self.trace_sampled(cx, &child, 0.0, b).0;
         }
         sum / k as f32
     }
@@ -293,7 +244,7 @@ impl Whitted {
     /// hit to the world's materials, whose texture matrices have the move
     /// back to world space folded in; object-space lookups hand the hit in
     /// its object's space to the scene's own matrices.
-    fn material_at(&self, world: &World, hit: &Hit) -> crate::scene::Phong {
+    fn material_at(&self, world: &World, hit: &Hit) -> Phong {
         match self.texture_space {
             TextureSpace::World => eval(world.materials(), hit.material, hit.point),
             TextureSpace::Object => eval(
@@ -307,28 +258,21 @@ impl Whitted {
     /// Phong light reflected towards `-d` from the light arriving as `inc`
     /// from `light`, times what of it gets through (one shadow ray when
     /// shadows are on).
-    #[allow(clippy::too_many_arguments)]
-    fn lit(
+    fn lit<O: RayObserver>(
         &self,
-        world: &World,
-        ray: &Ray,
+        cx: &mut Trace<O>,
+        at: &Shaded,
         from: &mut Spawn,
         light: &RenderLight,
         inc: &Incident,
-        m: &crate::scene::Phong,
-        n: Vec3,
-        ng: Vec3,
-        d: Vec3,
-        depth: u32,
-        c: &mut Counters,
-        obs: &mut impl RayObserver,
     ) -> Vec3 {
+        let Shaded { n, ng, d, .. } = *at;
         if n != ng && inc.to_light.dot(ng) <= 0.0 {
             // Smooth shading: a light behind the geometric surface does not
             // shine through it, whatever the interpolated normal says.
             return Vec3::ZERO;
         }
-        let reflected = phong_light(m, n, inc.to_light, -d, inc.color);
+        let reflected = phong_light(&at.m, n, inc.to_light, -d, inc.color);
         if reflected == Vec3::ZERO {
             return reflected; // nothing to shadow: no shadow ray needed
         }
@@ -336,7 +280,7 @@ impl Whitted {
         // between, and a zero-direction shadow ray would be meaningless.
         if self.shadows && inc.to_light != Vec3::ZERO {
             let target = ShadowTarget::of(light, inc);
-            reflected * self.light_through(world, from, ray.time, target, depth, c, obs)
+            reflected * self.light_through(cx, from, at.time, target, at.depth)
         } else {
             reflected
         }
@@ -346,24 +290,26 @@ impl Whitted {
     /// from `target` at instant `time`: 0 or 1 with opaque shadows; with
     /// transparent shadows the product of the `transparentColor` of
     /// everything in between.
-    #[allow(clippy::too_many_arguments)]
-    fn light_through(
+    fn light_through<O: RayObserver>(
         &self,
-        world: &World,
+        cx: &mut Trace<O>,
         from: &mut Spawn,
         time: f32,
         target: ShadowTarget,
         depth: u32,
-        c: &mut Counters,
-        obs: &mut impl RayObserver,
     ) -> Vec3 {
-        super::count_ray(c, RayKind::Shadow);
         if !self.transparent_shadows {
             let (shadow, tmax) = target.ray_from(from, time);
-            let blocked = world.occluded_leaving(&shadow, 0.0, tmax, from.leaving, c);
-            obs.shadow(&shadow, tmax, blocked, depth);
+            let blocked = cx.blocked(&shadow, tmax, from.leaving, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }
+        let Trace {
+            world,
+            counters: c,
+            observer: obs,
+            ..
+        } = cx;
+        super::count_ray(c, RayKind::Shadow);
         let mut filter = Vec3::ONE;
         let mut from = *from;
         // Each pass steps past one occluder, spawning the next segment from
@@ -372,10 +318,15 @@ impl Whitted {
         for _ in 0..64 {
             let (ray, tmax) = target.ray_from(&mut from, time);
             let Some(h) = world.intersect(&ray, 0.0, tmax, c) else {
-                obs.ray(RayKind::Shadow, &ray, tmax, depth, 0.0, None);
+                obs.ray(Branch::probe(RayKind::Shadow, depth), &ray, tmax, None);
                 return filter;
             };
-            obs.ray(RayKind::Shadow, &ray, h.t, depth, 0.0, Some(h.normal));
+            obs.ray(
+                Branch::probe(RayKind::Shadow, depth),
+                &ray,
+                h.t,
+                Some(h.normal),
+            );
             filter *= self.material_at(world, &h).transparent;
             if filter == Vec3::ZERO {
                 return filter;

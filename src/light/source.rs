@@ -305,8 +305,7 @@ impl Emitter {
                 dual,
                 ..
             } => {
-                let t = plane.intersect(ray, tmin, tmax)?;
-                let at = plane.surface(ray, t);
+                let (t, at) = plane.hit(ray, tmin, tmax)?;
                 let q = at.p - *corner;
                 let (s, u) = (q.dot(dual[0]), q.dot(dual[1]));
                 ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&u)).then_some((t, at))
@@ -316,8 +315,7 @@ impl Emitter {
                 radius,
                 plane,
             } => {
-                let t = plane.intersect(ray, tmin, tmax)?;
-                let at = plane.surface(ray, t);
+                let (t, at) = plane.hit(ray, tmin, tmax)?;
                 ((at.p - *center).length_squared() <= radius * radius).then_some((t, at))
             }
             Emitter::Sphere(s) => {

@@ -17,11 +17,10 @@
 
 use super::film::{merge, tiles, TileFilm};
 use super::pixel::{render_unit, PixelSink, PixelStrategy, PixelValue, Step};
-use super::{CameraModel, Control, Filter, Frame, PixelCost, Rendered, SampleRecord, Settings};
+use super::{Filter, Frame, PixelCost, Render, Rendered, SampleRecord, Settings};
 use crate::integrator::Integrator;
 use crate::math::{Vec2, Vec3};
 use crate::stats::Counters;
-use crate::world::World;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -90,23 +89,12 @@ impl<I: Integrator> Tracer<'_, I> {
 }
 
 /// Renders with adaptive subdivision (called by [`super::render_image`]).
-pub(super) fn render<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    settings: &Settings,
-    a: &Adaptive,
-    control: Control,
-) -> Rendered {
+pub(super) fn render<I: Integrator>(r: &Render<I>, a: &Adaptive) -> Rendered {
+    let (settings, control) = (r.settings, r.control);
     let (w, h) = settings.size;
     let depth = a.max_depth.min(Adaptive::MAX_DEPTH);
     let tracer = Tracer {
-        step: Step {
-            world,
-            camera,
-            integrator,
-            size: (w, h),
-        },
+        step: r.step(),
         settings,
         steps: 1 << depth,
     };
@@ -310,6 +298,8 @@ fn spread(c: &[Vec3; 4]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::{CameraModel, Control};
+    use crate::world::World;
     use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
     #[test]
@@ -388,16 +378,13 @@ mod tests {
     struct StreamValue;
 
     impl Integrator for StreamValue {
-        fn li(
+        fn li<O: crate::integrator::RayObserver>(
             &self,
-            _: &World,
+            cx: &mut crate::integrator::Trace<O>,
             _: &crate::math::Ray,
             _: f32,
-            stream: &mut crate::sampler::SampleStream,
-            _: &mut Counters,
-            _: &mut impl crate::integrator::RayObserver,
         ) -> (Vec3, Option<crate::world::Hit>) {
-            (Vec3::splat(stream.next_1d()), None)
+            (Vec3::splat(cx.stream.next_1d()), None)
         }
     }
 

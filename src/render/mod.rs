@@ -166,13 +166,58 @@ pub fn render_image<I: Integrator>(
     settings: &Settings,
     control: Control,
 ) -> Rendered {
-    if let Some(a) = settings.adaptive {
-        return adaptive::render(world, camera, integrator, settings, &a, control);
+    Render::new(world, camera, integrator, settings, control).run(None)
+}
+
+/// One render's inputs, as every path (bands, tiles, adaptive) takes them.
+pub(super) struct Render<'a, I> {
+    pub world: &'a World,
+    pub camera: &'a CameraModel,
+    pub integrator: &'a I,
+    pub settings: &'a Settings,
+    pub control: Control<'a>,
+}
+
+impl<'a, I: Integrator> Render<'a, I> {
+    fn new(
+        world: &'a World,
+        camera: &'a CameraModel,
+        integrator: &'a I,
+        settings: &'a Settings,
+        control: Control<'a>,
+    ) -> Self {
+        Self {
+            world,
+            camera,
+            integrator,
+            settings,
+            control,
+        }
     }
-    if settings.filter.support() == 0 {
-        return render_bands(world, camera, integrator, settings, control);
+
+    /// The whole image (`region` `None`) or what `region`'s pixels need:
+    /// adaptive subdivision when asked for (which ignores `region`), else
+    /// the band loop for filters inside the pixel and the whole image, else
+    /// the tiles.
+    fn run(&self, region: Option<Rect>) -> Rendered {
+        if let Some(a) = self.settings.adaptive {
+            return adaptive::render(self, &a);
+        }
+        if region.is_none() && self.settings.filter.support() == 0 {
+            return render_bands(self);
+        }
+        render_tiles(self, region)
     }
-    render_tiles(world, camera, integrator, settings, control, None)
+
+    /// The camera sample tracer the pixel strategies use.
+    fn step(&self) -> Step<'a, I> {
+        Step {
+            world: self.world,
+            camera: self.camera,
+            integrator: self.integrator,
+            size: self.settings.size,
+        }
+    }
 }
 
 /// Renders only what the pixels of `region` need: every tile whose film
@@ -192,22 +237,13 @@ pub fn render_region<I: Integrator>(
     control: Control,
     region: Rect,
 ) -> Rendered {
-    if let Some(a) = settings.adaptive {
-        return adaptive::render(world, camera, integrator, settings, &a, control);
-    }
-    render_tiles(world, camera, integrator, settings, control, Some(region))
+    Render::new(world, camera, integrator, settings, control).run(Some(region))
 }
 
 /// The tile loop of [`render_image`] and [`render_region`]: each tile's
 /// pixels into a film of the tile and its filter margin, the films merged.
-fn render_tiles<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    settings: &Settings,
-    control: Control,
-    region: Option<Rect>,
-) -> Rendered {
+fn render_tiles<I: Integrator>(r: &Render<I>, region: Option<Rect>) -> Rendered {
+    let (settings, control) = (r.settings, r.control);
     let (w, h) = settings.size;
     let rects = tiles(w, h, settings.tile_size);
     let support = settings.filter.support();
@@ -220,12 +256,7 @@ fn render_tiles<I: Integrator>(
             if region.is_some_and(|r| !rect.grown(support, w, h).overlaps(&r)) {
                 return None;
             }
-            let step = Step {
-                world,
-                camera,
-                integrator,
-                size: (w, h),
-            };
+            let step = r.step();
             let mut film = TileFilm::new(rect, settings.filter, (w, h));
             let (counters, kept) = render_unit(
                 &mut Supersample::new(step, settings),
@@ -270,13 +301,8 @@ fn render_tiles<I: Integrator>(
 /// [`BAND_ROWS`] full rows written straight into the frame, with no film and
 /// no copy. The arithmetic is the film's (`0 + w·c + …`, samples in index
 /// order), so the image is the one the tiled path would give, bit for bit.
-fn render_bands<I: Integrator>(
-    world: &World,
-    camera: &CameraModel,
-    integrator: &I,
-    settings: &Settings,
-    control: Control,
-) -> Rendered {
+fn render_bands<I: Integrator>(r: &Render<I>) -> Rendered {
+    let (settings, control) = (r.settings, r.control);
     let (w, h) = settings.size;
     let mut frame = Frame::new(w, h);
     let wu = w as usize;
@@ -310,12 +336,7 @@ fn render_bands<I: Integrator>(
                     samples,
                     cost,
                 };
-                let step = Step {
-                    world,
-                    camera,
-                    integrator,
-                    size: (w, h),
-                };
+                let step = r.step();
                 let out = render_unit(
                     &mut Supersample::new(step, settings),
                     rect,

@@ -18,7 +18,7 @@
 
 use super::film::{Rect, TileFilm};
 use super::{screen_point, CameraModel, Filter, PixelCost, SampleRecord, Settings};
-use crate::integrator::{Integrator, NoObserver};
+use crate::integrator::{Integrator, NoObserver, Trace};
 use crate::math::{Vec2, Vec3};
 use crate::sampler::{SampleStream, Sampler};
 use crate::stats::Counters;
@@ -57,14 +57,13 @@ impl<I: Integrator> Step<'_, I> {
     ) -> (Vec3, Option<Hit>) {
         let (w, h) = self.size;
         let ray = self.camera.sample_ray(screen_point(i, j, o, w, h), stream);
-        self.integrator.li(
-            self.world,
-            &ray,
-            self.camera.tmin(),
+        let cx = &mut Trace {
+            world: self.world,
             stream,
             counters,
-            &mut NoObserver,
-        )
+            observer: &mut NoObserver,
+        };
+        self.integrator.li(cx, &ray, self.camera.tmin())
     }
 }
 

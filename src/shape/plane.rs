@@ -74,6 +74,14 @@ impl Plane {
         (t > tmin && t < tmax).then_some(t)
     }
 
+    /// [`intersect`](Self::intersect) with the [`surface`](Self::surface)
+    /// point of the hit.
+    #[inline]
+    pub fn hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<(f32, SurfacePoint)> {
+        let t = self.intersect(ray, tmin, tmax)?;
+        Some((t, self.surface(ray, t)))
+    }
+
     /// Planes are unbounded, so they stay out of the acceleration structures
     /// and are tested on every ray. A plane whose normal lies exactly along an
     /// axis is still bounded along that one axis (its box is a slab of zero

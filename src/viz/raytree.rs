@@ -9,7 +9,7 @@
 //! drawn to `t = 100`. A shadow ray that something blocked is drawn dashed.
 
 use super::draw::Canvas;
-use crate::integrator::{Integrator, RayKind, RayRecorder, RecordedRay};
+use crate::integrator::{Integrator, RayKind, RayRecorder, RecordedRay, Trace};
 use crate::math::{Vec2, Vec3};
 use crate::render::{pixel_of_screen, screen_point, CameraModel, PixelOffset};
 use crate::sampler::Sampler;
@@ -51,14 +51,13 @@ pub fn record<I: Integrator>(
     let sampler = Sampler::fixed(Vec2::splat(0.5));
     let mut stream = sampler.stream((0, 0), 0);
     stream.skip();
-    let (color, _) = integrator.li(
+    let cx = &mut Trace {
         world,
-        &ray,
-        camera.tmin(),
-        &mut stream,
-        &mut Counters::default(),
-        &mut rec,
-    );
+        stream: &mut stream,
+        counters: &mut Counters::default(),
+        observer: &mut rec,
+    };
+    let (color, _) = integrator.li(cx, &ray, camera.tmin());
     RayTree {
         pixel: (x, y),
         size: (w, h),
@@ -87,14 +86,13 @@ pub fn record_sample<I: Integrator>(
     let offset = stream.next_2d();
     let ray = camera.sample_ray(screen_point(i, j, offset, w, h), &mut stream);
     let mut rec = RayRecorder::default();
-    let (color, _) = integrator.li(
+    let cx = &mut Trace {
         world,
-        &ray,
-        camera.tmin(),
-        &mut stream,
-        &mut Counters::default(),
-        &mut rec,
-    );
+        stream: &mut stream,
+        counters: &mut Counters::default(),
+        observer: &mut rec,
+    };
+    let (color, _) = integrator.li(cx, &ray, camera.tmin());
     RayTree {
         pixel: (x, y),
         size: (w, h),

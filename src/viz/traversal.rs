@@ -12,7 +12,7 @@
 use super::draw::Canvas;
 use crate::accel::bvh::{Bvh, NodeVisit};
 use crate::accel::grid::Face;
-use crate::accel::{AccelKind, Grid, HierarchyBvh, NestedGrid, Octree, PrimHit, Storage};
+use crate::accel::{AccelKind, Grid, HierarchyBvh, NestedGrid, Octree, PrimHit, Query, Storage};
 use crate::math::{Aabb, Ray, Vec2, Vec3};
 use crate::render::{pixel_of_screen, CameraModel};
 use crate::stats::Counters;
@@ -84,7 +84,7 @@ impl Structure {
         let prims = world.prims();
         let hit = match self {
             Structure::Grid(g) => {
-                g.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |cell| {
+                g.intersect_visiting(Query::new(prims, ray, tmin, f32::INFINITY), c, |cell| {
                     visits.push(Visit {
                         bounds: g.lattice().cell_bounds(cell.index),
                         entered: true,
@@ -94,7 +94,7 @@ impl Structure {
                 })
             }
             Structure::Octree(o) => {
-                o.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |leaf| {
+                o.intersect_visiting(Query::new(prims, ray, tmin, f32::INFINITY), c, |leaf| {
                     visits.push(Visit {
                         bounds: leaf.bounds,
                         entered: true,
@@ -105,7 +105,7 @@ impl Structure {
                 })
             }
             Structure::NestedGrid(g) => {
-                g.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |v| {
+                g.intersect_visiting(Query::new(prims, ray, tmin, f32::INFINITY), c, |v| {
                     visits.push(Visit {
                         bounds: v.bounds,
                         entered: true,
@@ -115,7 +115,7 @@ impl Structure {
                 })
             }
             Structure::Hierarchy(h) => {
-                h.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |v| {
+                h.intersect_visiting(Query::new(prims, ray, tmin, f32::INFINITY), c, |v| {
                     visits.push(Visit {
                         bounds: v.bounds,
                         entered: v.entered,
@@ -124,8 +124,10 @@ impl Structure {
                     })
                 })
             }
-            Structure::Bvh(b) => {
-                b.intersect_visiting(prims, ray, tmin, f32::INFINITY, c, |v: NodeVisit| {
+            Structure::Bvh(b) => b.intersect_visiting(
+                Query::new(prims, ray, tmin, f32::INFINITY),
+                c,
+                |v: NodeVisit| {
                     let n = &b.nodes()[v.node as usize];
                     visits.push(Visit {
                         bounds: n.bounds,
@@ -133,8 +135,8 @@ impl Structure {
                         leaf: n.is_leaf(),
                         face: None,
                     })
-                })
-            }
+                },
+            ),
         };
         (hit, visits)
     }

@@ -17,7 +17,7 @@ mod build;
 pub use crate::primitive::Primitive;
 pub use build::BuildOptions;
 
-use crate::accel::Aggregate;
+use crate::accel::{Aggregate, Query};
 use crate::light::{EmitterHit, Incident, LightSource};
 use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
 use crate::scene::{Background, Camera, Material, RenderLight};
@@ -195,7 +195,8 @@ impl World {
 
     /// Closest hit with `tmin < t < tmax`.
     pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> Option<Hit> {
-        let mut best = (self.accel).intersect_barycentric(&self.prims, ray, tmin, tmax, c);
+        let mut best =
+            (self.accel).intersect_barycentric(Query::new(&self.prims, ray, tmin, tmax), c);
         let mut tmax = best.map_or(tmax, |h| h.0.t);
         for &i in &self.unbounded {
             c.intersection_tests += 1;
@@ -308,7 +309,9 @@ impl World {
     /// Whether anything lies on the ray with `tmin < t < tmax`.
     pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> bool {
         self.unbounded_occludes(ray, tmin, tmax, None, c)
-            || self.accel.occluded(&self.prims, ray, tmin, tmax, c)
+            || self
+                .accel
+                .occluded(Query::new(&self.prims, ray, tmin, tmax), c)
     }
 
     /// Whether an unbounded primitive (a plane) other than `skip` lies on
@@ -368,11 +371,13 @@ impl World {
         match from.and_then(|i| self.prims.get(i as usize).map(|p| (i, &p.shape))) {
             Some((i, Shape::Triangle(_))) => {
                 self.unbounded_occludes(ray, tmin, tmax, None, c)
-                    || (self.accel).occluded_except(&self.prims, ray, tmin, tmax, i, c)
+                    || (self.accel).occluded_except(Query::new(&self.prims, ray, tmin, tmax), i, c)
             }
             Some((i, Shape::Plane(_))) => {
                 self.unbounded_occludes(ray, tmin, tmax, Some(i), c)
-                    || self.accel.occluded(&self.prims, ray, tmin, tmax, c)
+                    || self
+                        .accel
+                        .occluded(Query::new(&self.prims, ray, tmin, tmax), c)
             }
             _ => self.occluded(ray, tmin, tmax, c),
         }

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use glint::integrator::{Integrator, RayObserver};
+use glint::integrator::{Integrator, RayObserver, Trace};
 use glint::math::{Ray, Vec2, Vec3};
 use glint::sampler::Sampler;
 use glint::stats::Counters;
@@ -46,7 +46,13 @@ pub fn eye_ray<I: Integrator>(
     let sampler = Sampler::fixed(Vec2::splat(0.5));
     let mut stream = sampler.stream((0, 0), 0);
     stream.skip();
-    integrator.li(world, ray, tmin, &mut stream, counters, observer)
+    let cx = &mut Trace {
+        world,
+        stream: &mut stream,
+        counters,
+        observer,
+    };
+    integrator.li(cx, ray, tmin)
 }
 
 /// glint's own example scenes (`scenes/` in the repository).

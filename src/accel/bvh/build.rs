@@ -2,15 +2,13 @@
 
 use super::split::{choose, Item};
 use super::{Bvh, Node, Split};
-use crate::accel::overlap::{margin, padded};
+use crate::accel::overlap::{bounds_of, margin, padded};
 use crate::math::Aabb;
 use crate::primitive::Primitive;
 
 /// Builds the BVH over `ids`.
 pub(super) fn build(prims: &[Primitive], ids: Vec<u32>, split: Split) -> Bvh {
-    let bounds = ids
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+    let bounds = bounds_of(prims, &ids);
     let m = margin(&bounds);
     let mut items: Vec<Item> = ids
         .iter()

@@ -17,8 +17,8 @@ mod traverse;
 
 pub use traverse::NodeVisit;
 
-use super::{Aggregate, PrimHit, Split};
-use crate::math::{Aabb, Ray};
+use super::{Aggregate, PrimHit, Query, Split};
+use crate::math::Aabb;
 use crate::primitive::Primitive;
 use crate::stats::Counters;
 
@@ -79,14 +79,11 @@ impl Bvh {
     /// ([`Aggregate::intersect`] passes a visitor that does nothing).
     pub fn intersect_visiting(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
         visit: impl FnMut(NodeVisit),
     ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c, visit)
+        traverse::closest(self, q, c, visit)
     }
 
     /// Depth of the deepest leaf (a lone root is 0).
@@ -108,26 +105,12 @@ impl Bvh {
 }
 
 impl Aggregate for Bvh {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c, |_| {})
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        traverse::closest(self, q, c, |_| {})
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        traverse::any(self, prims, ray, tmin, tmax, c)
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        traverse::any(self, q, c)
     }
 
     fn bounds(&self) -> Aabb {
@@ -147,7 +130,7 @@ impl Aggregate for Bvh {
 mod tests {
     use super::*;
     use crate::accel::testutil::{assert_agrees, soup, sphere};
-    use crate::math::Vec3;
+    use crate::math::{Ray, Vec3};
 
     fn all(prims: &[Primitive]) -> Vec<u32> {
         (0..prims.len() as u32).collect()
@@ -172,16 +155,23 @@ mod tests {
         }
     }
 
+    /// 16 unit spheres along the x axis, 3 apart.
+    fn row_of_16() -> Vec<Primitive> {
+        (0..16)
+            .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))
+            .collect()
+    }
+
     #[test]
     fn the_far_child_is_skipped_once_the_near_one_hits() {
-        let prims: Vec<Primitive> = (0..16)
-            .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))
-            .collect();
+        let prims = row_of_16();
         let b = Bvh::new(&prims, all(&prims), Split::Sah);
         for (o, d, first) in [(-5.0, 1.0, 0), (60.0, -1.0, 15)] {
             let r = Ray::new(Vec3::X * o, Vec3::X * d);
             let mut c = Counters::default();
-            let h = b.intersect(&prims, &r, 0.0, f32::INFINITY, &mut c).unwrap();
+            let h = b
+                .intersect(Query::new(&prims, &r, 0.0, f32::INFINITY), &mut c)
+                .unwrap();
             assert_eq!(h.prim, first);
             assert!(c.intersection_tests <= 2, "{c:?}");
             assert!(c.nodes_visited <= 2 * b.depth() as u64 + 1, "{c:?}");
@@ -190,17 +180,15 @@ mod tests {
 
     #[test]
     fn occlusion_stops_at_the_first_hit() {
-        let prims: Vec<Primitive> = (0..16)
-            .map(|i| sphere(Vec3::X * (3.0 * i as f32), 1.0))
-            .collect();
+        let prims = row_of_16();
         let b = Bvh::new(&prims, all(&prims), Split::Median);
         // Leaves hold 4 spheres (in arbitrary order): the ray starts between
         // the 2nd and 3rd leaf and must stop inside the 3rd.
         let r = Ray::new(Vec3::new(22.5, 0.0, 0.0), Vec3::X);
         let mut c = Counters::default();
-        assert!(b.occluded(&prims, &r, 0.0, f32::INFINITY, &mut c));
+        assert!(b.occluded(Query::new(&prims, &r, 0.0, f32::INFINITY), &mut c));
         assert!(c.intersection_tests <= MAX_LEAF as u64, "{c:?}");
-        assert!(!b.occluded(&prims, &r, 0.0, 0.5, &mut c));
+        assert!(!b.occluded(Query::new(&prims, &r, 0.0, 0.5), &mut c));
     }
 
     #[test]
@@ -214,12 +202,7 @@ mod tests {
     }
 
     #[test]
-    fn empty_bvh_hits_nothing() {
-        let b = Bvh::new(&[], vec![], Split::Sah);
-        let r = Ray::new(Vec3::ZERO, Vec3::X);
-        let mut c = Counters::default();
-        assert!(b.intersect(&[], &r, 0.0, f32::INFINITY, &mut c).is_none());
-        assert!(!b.occluded(&[], &r, 0.0, f32::INFINITY, &mut c));
-        assert_eq!(b.depth(), 0);
+    fn an_empty_bvh_has_depth_0() {
+        assert_eq!(Bvh::new(&[], vec![], Split::Sah).depth(), 0);
     }
 }

@@ -8,9 +8,9 @@
 
 use super::split::FORCE_MEDIAN_DEPTH;
 use super::Bvh;
-use crate::accel::PrimHit;
+use crate::accel::mailbox::ItemTests;
+use crate::accel::{PrimHit, Query};
 use crate::math::Ray;
-use crate::primitive::Primitive;
 use crate::stats::Counters;
 
 /// Entries of the traversal stack: one per level at most, and the builder
@@ -82,58 +82,46 @@ fn walk(
     }
 }
 
-/// Closest hit with `tmin < t < tmax`; `visit` sees every node tested.
+/// Closest hit of `q`; `visit` sees every node tested.
 pub(super) fn closest(
     bvh: &Bvh,
-    prims: &[Primitive],
-    ray: &Ray,
-    tmin: f32,
-    tmax: f32,
+    q: Query,
     c: &mut Counters,
     visit: impl FnMut(NodeVisit),
 ) -> Option<PrimHit> {
-    let mut best = None;
-    let mut t_best = tmax;
-    walk(bvh, ray, tmin, &mut t_best, c, visit, |ids, t_best, c| {
-        for &id in ids {
-            c.intersection_tests += 1;
-            if let Some(t) = prims[id as usize].shape.intersect(ray, tmin, *t_best) {
-                *t_best = t;
-                best = Some(PrimHit { t, prim: id });
-            }
-        }
-        false
-    });
-    best
-}
-
-/// Whether anything lies on the ray with `tmin < t < tmax`; stops at the
-/// first hit found.
-pub(super) fn any(
-    bvh: &Bvh,
-    prims: &[Primitive],
-    ray: &Ray,
-    tmin: f32,
-    tmax: f32,
-    c: &mut Counters,
-) -> bool {
-    let mut hit = false;
-    let mut t_limit = tmax;
+    let mut tests = ItemTests::new(q, false);
+    let mut t_best = q.tmax;
     walk(
         bvh,
-        ray,
-        tmin,
+        q.ray,
+        q.tmin,
+        &mut t_best,
+        c,
+        visit,
+        |ids, t_best, c| {
+            tests.closest(ids, c);
+            *t_best = tests.t_best();
+            false
+        },
+    );
+    tests.best()
+}
+
+/// Whether anything lies on the ray of `q` in its range; stops at the
+/// first hit found.
+pub(super) fn any(bvh: &Bvh, q: Query, c: &mut Counters) -> bool {
+    let mut tests = ItemTests::new(q, false);
+    let mut hit = false;
+    let mut t_limit = q.tmax;
+    walk(
+        bvh,
+        q.ray,
+        q.tmin,
         &mut t_limit,
         c,
         |_| {},
-        |ids, t_limit, c| {
-            hit = ids.iter().any(|&id| {
-                c.intersection_tests += 1;
-                prims[id as usize]
-                    .shape
-                    .intersect(ray, tmin, *t_limit)
-                    .is_some()
-            });
+        |ids, _, c| {
+            hit = tests.any(ids, c);
             hit
         },
     );

@@ -15,143 +15,66 @@
 //! The AVX2 copy also tests a node's eight boxes with 256-bit operations
 //! (`traverse::RayData::boxes_avx`, given an `Avx` token made only here).
 
-use super::node::{Node, Tri4};
 use super::packet::{self, PacketRay};
 use super::traverse::{
-    self, BoxTest, Closest, Fallback, Portable, RayData, ANY_OCTANT, DEEP, SHALLOW,
+    self, BoxTest, Closest, Fallback, Portable, RayData, Tree, ANY_OCTANT, DEEP, SHALLOW,
 };
 use crate::math::Ray;
 use crate::stats::TraversalStats;
 
-/// Closest hit (see `traverse::closest`), on the best copy for this CPU, with
-/// the deep stack when the tree is `deep` (`traverse::SHALLOW_DEPTH`).
-#[allow(clippy::too_many_arguments)]
+/// A walk through the tree, generic over the box test: [`run`] runs it on
+/// the best copy for this CPU. `walk` is always inlined, so that each copy
+/// below compiles it with its own target features.
+pub(crate) trait Walk {
+    /// What the walk answers.
+    type Out;
+    /// The walk with box test `bt`.
+    fn walk<B: BoxTest>(&mut self, bt: B) -> Self::Out;
+}
+
+/// `w` on the AVX2 copy where the CPU has AVX2 and FMA, else on the
+/// portable one.
 #[inline]
-pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    ray: &Ray,
-    tmin: f32,
-    tmax: f32,
-    stats: &mut S,
-    deep: bool,
-) -> Option<Closest> {
+pub(crate) fn run<W: Walk>(w: W) -> W::Out {
     #[cfg(target_arch = "x86_64")]
     if avx2_fma() {
         // SAFETY: calling a `#[target_feature(enable = "avx2,fma")]` function
         // is sound exactly when the CPU supports AVX2 and FMA, checked just
         // above.
-        return unsafe { avx2::closest(nodes, tris, fallback, ray, tmin, tmax, stats, deep) };
+        return unsafe { avx2::run(w) };
     }
-    portable::closest(nodes, tris, fallback, ray, tmin, tmax, stats, deep)
+    portable::run(w)
 }
 
-/// Any hit but triangle `skip` (see `traverse::any`), on the best copy for
-/// this CPU.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    ray: &Ray,
-    (tmin, tmax): (f32, f32),
-    skip: u32,
-    stats: &mut S,
-    deep: bool,
-) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if avx2_fma() {
-        // SAFETY: as in `closest`: AVX2 and FMA are present, checked just
-        // above.
-        return unsafe { avx2::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep) };
-    }
-    portable::any(nodes, tris, fallback, ray, (tmin, tmax), skip, stats, deep)
-}
+#[cfg(test)]
+pub(crate) use portable::run as run_portable;
 
-/// The closest hit of each ray of a packet (see `packet::closest`), on the
-/// best copy for this CPU.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-pub(crate) fn closest8<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    rays: &[PacketRay],
-    out: &mut [Option<Closest>],
-    stats: &mut S,
-    deep: bool,
-) {
-    #[cfg(target_arch = "x86_64")]
-    if avx2_fma() {
-        // SAFETY: as in `closest`: AVX2 and FMA are present, checked just
-        // above.
-        return unsafe { avx2::closest8(nodes, tris, fallback, rays, out, stats, deep) };
-    }
-    portable::closest8(nodes, tris, fallback, rays, out, stats, deep)
-}
+/// The portable copy, out of line: inlined into [`run`], its stack frame
+/// and saved registers were set up on every query even when the AVX2 copy
+/// ran (callgrind, scene6_07: 40 instructions a shadow ray in the
+/// dispatcher alone).
+mod portable {
+    use super::*;
 
-/// Which rays of a packet are blocked (see `packet::any`), on the best
-/// copy for this CPU.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-pub(crate) fn any8<S: TraversalStats, F: Fallback + ?Sized>(
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    rays: &[PacketRay],
-    skip: &[u32],
-    stats: &mut S,
-    deep: bool,
-) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    if avx2_fma() {
-        // SAFETY: as in `closest`: AVX2 and FMA are present, checked just
-        // above.
-        return unsafe { avx2::any8(nodes, tris, fallback, rays, skip, stats, deep) };
-    }
-    portable::any8(nodes, tris, fallback, rays, skip, stats, deep)
-}
-
-/// The packet walks with box test `bt` and the stack the tree's depth
-/// needs. Always inlined, as [`closest_with`].
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn closest8_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
-    bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    rays: &[PacketRay],
-    out: &mut [Option<Closest>],
-    stats: &mut S,
-    deep: bool,
-) {
-    if deep {
-        packet::closest::<S, F, B, DEEP>(bt, nodes, tris, fallback, rays, out, stats)
-    } else {
-        packet::closest::<S, F, B, SHALLOW>(bt, nodes, tris, fallback, rays, out, stats)
+    #[inline(never)]
+    pub(crate) fn run<W: Walk>(mut w: W) -> W::Out {
+        w.walk(Portable)
     }
 }
 
-/// See [`closest8_with`].
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn any8_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
-    bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    rays: &[PacketRay],
-    skip: &[u32],
-    stats: &mut S,
-    deep: bool,
-) -> u32 {
-    if deep {
-        packet::any::<S, F, B, DEEP>(bt, nodes, tris, fallback, rays, skip, stats)
-    } else {
-        packet::any::<S, F, B, SHALLOW>(bt, nodes, tris, fallback, rays, skip, stats)
+/// The AVX2 copy: the portable traversal inlined into a function compiled
+/// with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::*;
+    use crate::accel::bvh8::traverse::Avx;
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn run<W: Walk>(mut w: W) -> W::Out {
+        // SAFETY: this function is called only after `avx2_fma()`
+        // (`Avx::new`'s contract).
+        let avx = unsafe { Avx::new() };
+        w.walk(avx)
     }
 }
 
@@ -160,6 +83,53 @@ fn any8_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
 #[inline(always)]
 fn avx2_fma() -> bool {
     std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
+/// The closest hit of one ray in `(tmin, tmax)` (see `traverse::closest`).
+pub(crate) struct ClosestHit<'a, F: ?Sized, S> {
+    pub tree: Tree<'a, F>,
+    pub ray: &'a Ray,
+    pub tmin: f32,
+    pub tmax: f32,
+    pub stats: &'a mut S,
+}
+
+impl<F: Fallback + ?Sized, S: TraversalStats> Walk for ClosestHit<'_, F, S> {
+    type Out = Option<Closest>;
+
+    /// The ray's constants, then the stack the tree's depth needs.
+    #[inline(always)]
+    fn walk<B: BoxTest>(&mut self, bt: B) -> Option<Closest> {
+        // By reference, fields read in place: moving `self` or its tree
+        // into locals copied them on every query (callgrind: some 25
+        // instructions a ray).
+        let (t, rd) = (&self.tree, &RayData::new(self.ray));
+        let (tmin, tmax, stats) = (self.tmin, self.tmax, &mut *self.stats);
+        match (t.deep, rd.reduce_as_ints(tmin)) {
+            (false, true) => traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT, true>(
+                bt, t, rd, tmin, tmax, stats,
+            ),
+            (true, true) => {
+                traverse::closest::<S, F, _, DEEP, ANY_OCTANT, true>(bt, t, rd, tmin, tmax, stats)
+            }
+            (false, false) => traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT, false>(
+                bt, t, rd, tmin, tmax, stats,
+            ),
+            (true, false) => {
+                traverse::closest::<S, F, _, DEEP, ANY_OCTANT, false>(bt, t, rd, tmin, tmax, stats)
+            }
+        }
+    }
+}
+
+/// Whether anything but triangle `skip` lies on one ray in `(tmin, tmax)`
+/// (see `traverse::any`).
+pub(crate) struct AnyHit<'a, F: ?Sized, S> {
+    pub tree: Tree<'a, F>,
+    pub ray: &'a Ray,
+    pub range: (f32, f32),
+    pub skip: u32,
+    pub stats: &'a mut S,
 }
 
 /// `$walk` with `O` the ray's octant as a constant: one copy of the walk per
@@ -175,274 +145,98 @@ fn avx2_fma() -> bool {
 /// (incoherent any-hit rays) kept its time within 1%.
 macro_rules! by_octant {
     ($rd:expr, |O| $walk:expr) => {
+        by_octant!(@ $rd, $walk, [0 1 2 3 4 5 6] 7)
+    };
+    (@ $rd:expr, $walk:expr, [$($o:literal)*] $last:literal) => {
         match $rd.octant() {
-            0 => {
-                const O: usize = 0;
+            $($o => {
+                const O: usize = $o;
                 $walk
-            }
-            1 => {
-                const O: usize = 1;
-                $walk
-            }
-            2 => {
-                const O: usize = 2;
-                $walk
-            }
-            3 => {
-                const O: usize = 3;
-                $walk
-            }
-            4 => {
-                const O: usize = 4;
-                $walk
-            }
-            5 => {
-                const O: usize = 5;
-                $walk
-            }
-            6 => {
-                const O: usize = 6;
-                $walk
-            }
+            })*
             _ => {
-                const O: usize = 7;
+                const O: usize = $last;
                 $walk
             }
         }
     };
 }
 
-/// The closest-hit walk with box test `bt`: the ray's constants, then the
-/// stack the tree's depth needs. Always inlined, so that each copy below
-/// compiles it with its own target features.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn closest_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
-    bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    ray: &Ray,
-    tmin: f32,
-    tmax: f32,
-    stats: &mut S,
-    deep: bool,
-) -> Option<Closest> {
-    let rd = &RayData::new(ray);
-    match (deep, rd.reduce_as_ints(tmin)) {
-        (false, true) => traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT, true>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
-        ),
-        (true, true) => traverse::closest::<S, F, _, DEEP, ANY_OCTANT, true>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
-        ),
-        (false, false) => traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT, false>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
-        ),
-        (true, false) => traverse::closest::<S, F, _, DEEP, ANY_OCTANT, false>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, stats,
-        ),
+impl<F: Fallback + ?Sized, S: TraversalStats> Walk for AnyHit<'_, F, S> {
+    type Out = bool;
+
+    /// As [`ClosestHit`]'s, with the octant fixed at compile time on the
+    /// usual path (see [`by_octant`]).
+    #[inline(always)]
+    fn walk<B: BoxTest>(&mut self, bt: B) -> bool {
+        // Fields read in place (see `ClosestHit`'s walk).
+        let (t, rd) = (&self.tree, &RayData::new(self.ray));
+        let (range, skip, stats) = (self.range, self.skip, &mut *self.stats);
+        match (t.deep, rd.reduce_as_ints(range.0)) {
+            (false, true) => by_octant!(rd, |O| traverse::any::<S, F, _, SHALLOW, O, true>(
+                bt, t, rd, range, skip, stats
+            )),
+            (true, true) => {
+                traverse::any::<S, F, _, DEEP, ANY_OCTANT, true>(bt, t, rd, range, skip, stats)
+            }
+            // Rare (a negative `tmin`, an origin beyond about 1e20): one copy
+            // per stack, the octant read at run time.
+            (false, false) => {
+                traverse::any::<S, F, _, SHALLOW, ANY_OCTANT, false>(bt, t, rd, range, skip, stats)
+            }
+            (true, false) => {
+                traverse::any::<S, F, _, DEEP, ANY_OCTANT, false>(bt, t, rd, range, skip, stats)
+            }
+        }
     }
 }
 
-/// The any-hit walk with box test `bt` (see [`closest_with`]).
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn any_with<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
-    bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    ray: &Ray,
-    (tmin, tmax): (f32, f32),
-    skip: u32,
-    stats: &mut S,
-    deep: bool,
-) -> bool {
-    let rd = &RayData::new(ray);
-    match (deep, rd.reduce_as_ints(tmin)) {
-        (false, true) => by_octant!(rd, |O| traverse::any::<S, F, _, SHALLOW, O, true>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats
-        )),
-        (true, true) => traverse::any::<S, F, _, DEEP, ANY_OCTANT, true>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
-        ),
-        // Rare (a negative `tmin`, an origin beyond about 1e20): one copy
-        // per stack, the octant read at run time.
-        (false, false) => traverse::any::<S, F, _, SHALLOW, ANY_OCTANT, false>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
-        ),
-        (true, false) => traverse::any::<S, F, _, DEEP, ANY_OCTANT, false>(
-            bt, nodes, tris, fallback, rd, tmin, tmax, skip, stats,
-        ),
+/// The closest hit of each ray of a packet into `out` (see
+/// `packet::closest`).
+pub(crate) struct ClosestHits<'a, F: ?Sized, S> {
+    pub tree: Tree<'a, F>,
+    pub rays: &'a [PacketRay],
+    pub out: &'a mut [Option<Closest>],
+    pub stats: &'a mut S,
+}
+
+impl<F: Fallback + ?Sized, S: TraversalStats> Walk for ClosestHits<'_, F, S> {
+    type Out = ();
+
+    /// The stack the tree's depth needs.
+    #[inline(always)]
+    fn walk<B: BoxTest>(&mut self, bt: B) {
+        let (tree, rays) = (&self.tree, self.rays);
+        let (out, stats) = (&mut *self.out, &mut *self.stats);
+        if tree.deep {
+            packet::closest::<S, F, B, DEEP>(bt, tree, rays, out, stats)
+        } else {
+            packet::closest::<S, F, B, SHALLOW>(bt, tree, rays, out, stats)
+        }
     }
 }
 
-#[cfg(test)]
-pub(crate) use portable::{any8 as portable_any8, closest8 as portable_closest8};
-
-/// The portable copies, out of line: inlined into the dispatchers above,
-/// their stack frame and saved registers were set up on every query even
-/// when the AVX2 copy ran (callgrind, scene6_07: 40 instructions a shadow
-/// ray in the dispatcher alone).
-mod portable {
-    use super::*;
-
-    #[allow(clippy::too_many_arguments)]
-    #[inline(never)]
-    pub(super) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        stats: &mut S,
-        deep: bool,
-    ) -> Option<Closest> {
-        closest_with(
-            Portable, nodes, tris, fallback, ray, tmin, tmax, stats, deep,
-        )
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    #[inline(never)]
-    pub(super) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        ray: &Ray,
-        (tmin, tmax): (f32, f32),
-        skip: u32,
-        stats: &mut S,
-        deep: bool,
-    ) -> bool {
-        any_with(
-            Portable,
-            nodes,
-            tris,
-            fallback,
-            ray,
-            (tmin, tmax),
-            skip,
-            stats,
-            deep,
-        )
-    }
-    #[allow(clippy::too_many_arguments)]
-    #[inline(never)]
-    pub(crate) fn closest8<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        rays: &[PacketRay],
-        out: &mut [Option<Closest>],
-        stats: &mut S,
-        deep: bool,
-    ) {
-        closest8_with(Portable, nodes, tris, fallback, rays, out, stats, deep)
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    #[inline(never)]
-    pub(crate) fn any8<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        rays: &[PacketRay],
-        skip: &[u32],
-        stats: &mut S,
-        deep: bool,
-    ) -> u32 {
-        any8_with(Portable, nodes, tris, fallback, rays, skip, stats, deep)
-    }
+/// Which rays of a packet something but their `skip` blocks (see
+/// `packet::any`).
+pub(crate) struct AnyHits<'a, F: ?Sized, S> {
+    pub tree: Tree<'a, F>,
+    pub rays: &'a [PacketRay],
+    pub skip: &'a [u32],
+    pub stats: &'a mut S,
 }
 
-/// The AVX2 copies: the portable traversal inlined into functions compiled
-/// with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use super::*;
-    use crate::accel::bvh8::traverse::Avx;
+impl<F: Fallback + ?Sized, S: TraversalStats> Walk for AnyHits<'_, F, S> {
+    type Out = u32;
 
-    #[allow(clippy::too_many_arguments)]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn closest<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        stats: &mut S,
-        deep: bool,
-    ) -> Option<Closest> {
-        // SAFETY: these functions are called only after `avx2_fma()`
-        // (`Avx::new`'s contract).
-        let avx = unsafe { Avx::new() };
-        closest_with(avx, nodes, tris, fallback, ray, tmin, tmax, stats, deep)
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn any<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        ray: &Ray,
-        (tmin, tmax): (f32, f32),
-        skip: u32,
-        stats: &mut S,
-        deep: bool,
-    ) -> bool {
-        // SAFETY: these functions are called only after `avx2_fma()`
-        // (`Avx::new`'s contract).
-        let avx = unsafe { Avx::new() };
-        any_with(
-            avx,
-            nodes,
-            tris,
-            fallback,
-            ray,
-            (tmin, tmax),
-            skip,
-            stats,
-            deep,
-        )
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn closest8<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        rays: &[PacketRay],
-        out: &mut [Option<Closest>],
-        stats: &mut S,
-        deep: bool,
-    ) {
-        // SAFETY: these functions are called only after `avx2_fma()`
-        // (`Avx::new`'s contract).
-        let avx = unsafe { Avx::new() };
-        closest8_with(avx, nodes, tris, fallback, rays, out, stats, deep)
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn any8<S: TraversalStats, F: Fallback + ?Sized>(
-        nodes: &[Node],
-        tris: &[Tri4],
-        fallback: &F,
-        rays: &[PacketRay],
-        skip: &[u32],
-        stats: &mut S,
-        deep: bool,
-    ) -> u32 {
-        // SAFETY: these functions are called only after `avx2_fma()`
-        // (`Avx::new`'s contract).
-        let avx = unsafe { Avx::new() };
-        any8_with(avx, nodes, tris, fallback, rays, skip, stats, deep)
+    /// The stack the tree's depth needs.
+    #[inline(always)]
+    fn walk<B: BoxTest>(&mut self, bt: B) -> u32 {
+        let (tree, rays, skip) = (&self.tree, self.rays, self.skip);
+        let stats = &mut *self.stats;
+        if tree.deep {
+            packet::any::<S, F, B, DEEP>(bt, tree, rays, skip, stats)
+        } else {
+            packet::any::<S, F, B, SHALLOW>(bt, tree, rays, skip, stats)
+        }
     }
 }
 
@@ -450,34 +244,96 @@ mod avx2 {
 mod tests {
     use super::*;
     use crate::accel::bvh8::node::NO_ITEM;
+    use crate::accel::bvh8::PACKET;
     use crate::accel::testutil::{ray, soup, Rng};
     use crate::accel::Bvh8;
     use crate::stats::Counters;
 
-    /// The portable copy (the only one on a CPU without AVX2, so never the
-    /// dispatched one here) gives the dispatched copy's answers and
-    /// statistics, bit for bit, with either stack.
+    /// The portable copy gives the dispatched (AVX2) copy's answers and
+    /// statistics, bit for bit, with either stack, for single rays and
+    /// packets. Skipped, with a line, on a CPU without AVX2 and FMA (where
+    /// both are the portable copy).
     #[test]
     fn the_portable_copy_answers_as_the_dispatched_one() {
+        #[cfg(target_arch = "x86_64")]
+        if !crate::testdata::avx2_fma("the_portable_copy_answers_as_the_dispatched_one") {
+            return;
+        }
         let prims = soup(9, 2000);
         let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
-        let (nodes, tris, fb) = (&b.nodes, &b.tris, prims.as_slice());
         let mut r = Rng::new(10);
         let (mut hits, mut blocked) = (0, 0);
+        let mut packet = Vec::new();
         for _ in 0..1000 {
             let q = ray(&mut r);
+            packet.push(PacketRay {
+                ray: q,
+                tmin: 0.0,
+                tmax: 3.0,
+            });
             for deep in [false, true] {
+                let tree = Tree {
+                    deep,
+                    ..b.tree(prims.as_slice())
+                };
                 let (mut c1, mut c2) = (Counters::default(), Counters::default());
-                let inf = f32::INFINITY;
-                let want = closest(nodes, tris, fb, &q, 0.0, inf, &mut c1, deep);
-                let got = portable::closest(nodes, tris, fb, &q, 0.0, inf, &mut c2, deep);
+                let closest = |stats| ClosestHit {
+                    tree,
+                    ray: &q,
+                    tmin: 0.0,
+                    tmax: f32::INFINITY,
+                    stats,
+                };
+                let want = run(closest(&mut c1));
+                let got = run_portable(closest(&mut c2));
                 assert_eq!(got, want);
-                let want = any(nodes, tris, fb, &q, (0.0, 0.2), NO_ITEM, &mut c1, deep);
-                let got = portable::any(nodes, tris, fb, &q, (0.0, 0.2), NO_ITEM, &mut c2, deep);
+                let any = |stats| AnyHit {
+                    tree,
+                    ray: &q,
+                    range: (0.0, 0.2),
+                    skip: NO_ITEM,
+                    stats,
+                };
+                let want = run(any(&mut c1));
+                let got = run_portable(any(&mut c2));
                 assert_eq!(got, want);
-                assert_eq!(format!("{c1:?}"), format!("{c2:?}"));
                 hits += usize::from(want);
                 blocked += usize::from(got);
+                if packet.len() == PACKET {
+                    let rays = &packet[..];
+                    let (mut a, mut c) = ([None; PACKET], [None; PACKET]);
+                    run(ClosestHits {
+                        tree,
+                        rays,
+                        out: &mut a,
+                        stats: &mut c1,
+                    });
+                    run_portable(ClosestHits {
+                        tree,
+                        rays,
+                        out: &mut c,
+                        stats: &mut c2,
+                    });
+                    assert_eq!(a, c);
+                    let skip = &[];
+                    let x = run(AnyHits {
+                        tree,
+                        rays,
+                        skip,
+                        stats: &mut c1,
+                    });
+                    let y = run_portable(AnyHits {
+                        tree,
+                        rays,
+                        skip,
+                        stats: &mut c2,
+                    });
+                    assert_eq!(x, y);
+                }
+                assert_eq!(format!("{c1:?}"), format!("{c2:?}"));
+            }
+            if packet.len() == PACKET {
+                packet.clear();
             }
         }
         assert!((100..1900).contains(&hits) && blocked == hits, "{hits}");

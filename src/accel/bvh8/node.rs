@@ -150,6 +150,21 @@ impl Tri4 {
     pub fn has_other(&self) -> bool {
         self.ids.iter().any(|&id| id != NO_ITEM && id & OTHER != 0)
     }
+
+    /// The ids of the items that are not triangles (the flag cleared).
+    #[inline(always)]
+    pub fn others(&self) -> impl Iterator<Item = u32> + '_ {
+        self.ids
+            .iter()
+            .filter(|&&id| id != NO_ITEM && id & OTHER != 0)
+            .map(|&id| id & !OTHER)
+    }
+
+    /// How many items the block holds (its used lanes).
+    #[inline(always)]
+    pub fn items(&self) -> u64 {
+        self.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64
+    }
 }
 
 #[cfg(test)]

@@ -4,13 +4,13 @@
 //! bounds from the extremes of the rays' `1 / dir` and `origin · inv`,
 //! which keep every box any ray's own test keeps); per leaf's box, each
 //! ray's own test; per leaf, each ray's own triangle test
-//! (`traverse::leaf_block`). What the packet saves is the node work: one
+//! (`Tree::nearest_in_leaf`). What the packet saves is the node work: one
 //! box test and one ordering a node for all its rays.
 //!
 //! Same hits as single rays, bit for bit: a ray's closest hit is the
 //! nearest of the items in the leaves it tests, which hold every item the
 //! ray meets in its range, the tie between two items at the same `t` going
-//! to the smaller id (`traverse::closer`), whatever the order of the
+//! to the smaller id (`Nearest::closer`), whatever the order of the
 //! visit; an any-hit answer is a yes or a no.
 //!
 //! Packets whose rays do not share an octant or whose directions spread
@@ -19,9 +19,9 @@
 //! negative `tmin`, an origin far out), are walked one ray at a time.
 
 use super::lanes::{Lanes, W};
-use super::node::{is_leaf, leaf_range, Node, Tri4, EMPTY, NO_ITEM, OTHER};
+use super::node::{is_leaf, Node, EMPTY, NO_ITEM};
 use super::traverse::{
-    self, leaf_block, prefetch_child, BoxTest, Closest, Fallback, LeafRay, RayData, ANY_OCTANT,
+    self, insert_far_first, BoxTest, Closest, Fallback, LeafRay, Nearest, RayData, Tree, ANY_OCTANT,
 };
 use crate::math::Ray;
 use crate::stats::TraversalStats;
@@ -186,20 +186,17 @@ impl Frustum {
 /// per node for the packet, each ray's own test at leaves' boxes); other
 /// packets, and rays off the integer path, the single walk. Always
 /// inlined, so that `dispatch`'s AVX2 copy compiles it with AVX2.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
     bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
+    tree: &Tree<F>,
     rays: &[PacketRay],
     out: &mut [Option<Closest>],
     stats: &mut S,
 ) {
     let out = &mut out[..rays.len()];
     out.fill(None);
-    if nodes.is_empty() || rays.is_empty() {
+    if tree.nodes.is_empty() || rays.is_empty() {
         return;
     }
     let (f, walked) = Frustum::new(rays);
@@ -208,30 +205,27 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
         if walked & 1 << r == 0 {
             let rd = &RayData::new(&q.ray);
             out[r] = traverse::closest::<S, F, B, N, ANY_OCTANT, false>(
-                bt, nodes, tris, fallback, rd, q.tmin, q.tmax, stats,
+                bt, tree, rd, q.tmin, q.tmax, stats,
             );
         }
     }
     if let Some(f) = f {
-        closest_frustum::<S, F, B, N>(bt, nodes, tris, fallback, rays, &f, walked, out, stats)
+        closest_frustum::<S, F, B, N>(bt, tree, rays, (&f, walked), out, stats)
     }
 }
 
 /// Which rays of `rays` something but triangle `skip[r]` blocks (bit `r`;
 /// `skip` empty or one id per ray, [`NO_ITEM`] for none), as
 /// `traverse::any` answers for each; the walks chosen as in [`closest`].
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
     bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
+    tree: &Tree<F>,
     rays: &[PacketRay],
     skip: &[u32],
     stats: &mut S,
 ) -> u32 {
-    if nodes.is_empty() || rays.is_empty() {
+    if tree.nodes.is_empty() || rays.is_empty() {
         return 0;
     }
     debug_assert!(skip.is_empty() || skip.len() == rays.len());
@@ -242,18 +236,14 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
         if walked & 1 << r == 0 {
             let rd = &RayData::new(&q.ray);
             let skip = skip.get(r).copied().unwrap_or(NO_ITEM);
-            let h = traverse::any::<S, F, B, N, ANY_OCTANT, false>(
-                bt, nodes, tris, fallback, rd, q.tmin, q.tmax, skip, stats,
-            );
+            let range = (q.tmin, q.tmax);
+            let h =
+                traverse::any::<S, F, B, N, ANY_OCTANT, false>(bt, tree, rd, range, skip, stats);
             hit |= u32::from(h) << r;
         }
     }
     match f {
-        Some(f) => {
-            hit | any_frustum::<S, F, B, N>(
-                bt, nodes, tris, fallback, rays, skip, &f, walked, stats,
-            )
-        }
+        Some(f) => hit | any_frustum::<S, F, B, N>(bt, tree, rays, (&f, walked), skip, stats),
         None => hit,
     }
 }
@@ -270,25 +260,51 @@ fn child_rays(f: &Frustum, node: &Node, i: usize, active: u32, tmax: Lanes) -> u
     }
 }
 
-/// The closest-hit walk of a packet sharing an octant (see [`Frustum`]).
-#[allow(clippy::too_many_arguments)]
+/// Calls `f(r, ray, leaf)` for each ray `r` of the mask `active`, with its
+/// [`LeafRay`] (made at the first leaf it reaches).
 #[inline(always)]
-fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
-    bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
-    rays: &[PacketRay],
-    f: &Frustum,
-    walked: u32,
-    out: &mut [Option<Closest>],
-    stats: &mut S,
+fn each_ray<'r>(
+    rays: &'r [PacketRay],
+    leaf_ray: &mut [Option<LeafRay<'r>>; PACKET],
+    active: u32,
+    mut f: impl FnMut(usize, &'r PacketRay, &LeafRay<'r>),
 ) {
-    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let mut todo = active;
+    while todo != 0 {
+        let r = todo.trailing_zeros() as usize;
+        todo &= todo - 1;
+        let q = &rays[r];
+        f(
+            r,
+            q,
+            leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray)),
+        );
+    }
+}
+
+/// Each ray's `tmax`, one lane per ray.
+#[inline(always)]
+fn tmax_lanes(rays: &[PacketRay]) -> Lanes {
     let mut tmax = Lanes::splat(0.0);
     for (r, q) in rays.iter().enumerate() {
         tmax[r] = q.tmax;
     }
+    tmax
+}
+
+/// The closest-hit walk of a packet sharing an octant (see [`Frustum`]),
+/// for the rays `walked`.
+#[inline(always)]
+fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
+    bt: B,
+    tree: &Tree<F>,
+    rays: &[PacketRay],
+    (f, walked): (&Frustum, u32),
+    out: &mut [Option<Closest>],
+    stats: &mut S,
+) {
+    let (mut n_nodes, mut n_tests) = (0u64, 0u64);
+    let mut tmax = tmax_lanes(rays);
     let mut best: [Option<Closest>; PACKET] = [None; PACKET];
     let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
     let mut stack = [(0u32, 0u32, 0f32); N];
@@ -296,10 +312,7 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
     let (mut cur, mut active) = (0u32, walked);
     while active != 0 {
         if !is_leaf(cur) {
-            let node = &nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
+            let node = tree.node::<S>(cur, &mut n_nodes);
             let (mut mask, dist) = f.boxes(node, tmax.max_of(active));
             let dist = dist.to_array();
             // Nearest first: the others pushed far to near.
@@ -313,13 +326,8 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
                     continue;
                 }
                 let e = (node.child[i], m, dist[i]);
-                prefetch_child(nodes, tris, e.0);
-                let mut j = k;
-                while j > 0 && kids[j - 1].2 < e.2 {
-                    kids[j] = kids[j - 1];
-                    j -= 1;
-                }
-                kids[j] = e;
+                tree.prefetch_child(e.0);
+                insert_far_first(&mut kids, k, e, |e| e.2);
                 k += 1;
             }
             if k > 0 {
@@ -331,22 +339,14 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
                 continue;
             }
         } else if cur != EMPTY {
-            let (start, count) = leaf_range(cur);
-            let mut todo = active;
-            while todo != 0 {
-                let r = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                let q = &rays[r];
-                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray));
-                let mut t = tmax[r];
-                for b in &tris[start..start + count] {
-                    if S::ENABLED {
-                        n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
-                    }
-                    leaf_block(bt, lr, b, fallback, &q.ray, q.tmin, &mut t, &mut best[r]);
-                }
-                tmax[r] = t;
-            }
+            each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
+                let mut near = Nearest {
+                    tmax: tmax[r],
+                    best: best[r],
+                };
+                n_tests += tree.nearest_in_leaf::<S, _>(bt, cur, lr, q.tmin, &mut near);
+                (tmax[r], best[r]) = (near.tmax, near.best);
+            });
         }
         // Pop the nearest pending child that some ray can still find a
         // closer hit in (the entry's distance is below each ray's own).
@@ -369,26 +369,20 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
     stats.add(n_nodes, n_tests);
 }
 
-/// The any-hit walk of a packet sharing an octant (see [`Frustum`]).
-#[allow(clippy::too_many_arguments)]
+/// The any-hit walk of a packet sharing an octant (see [`Frustum`]), for
+/// the rays `walked`.
 #[inline(always)]
 fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usize>(
     bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
+    tree: &Tree<F>,
     rays: &[PacketRay],
+    (f, walked): (&Frustum, u32),
     skip: &[u32],
-    f: &Frustum,
-    walked: u32,
     stats: &mut S,
 ) -> u32 {
     let skip_of = |r: usize| skip.get(r).copied().unwrap_or(NO_ITEM);
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
-    let mut tmax = Lanes::splat(0.0);
-    for (r, q) in rays.iter().enumerate() {
-        tmax[r] = q.tmax;
-    }
+    let tmax = tmax_lanes(rays);
     let tmax_hi = tmax.max_of(walked);
     let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
     let mut stack = [(0u32, 0u32); N];
@@ -399,10 +393,7 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
     let (mut cur, mut active) = (0u32, walked);
     loop {
         if !is_leaf(cur) {
-            let node = &nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
+            let node = tree.node::<S>(cur, &mut n_nodes);
             let (mut mask, _) = f.boxes(node, tmax_hi);
             let mut next = None;
             while mask != 0 {
@@ -412,7 +403,7 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
                 if m == 0 {
                     continue;
                 }
-                prefetch_child(nodes, tris, node.child[i]);
+                tree.prefetch_child(node.child[i]);
                 if next.is_none() {
                     next = Some((node.child[i], m));
                 } else {
@@ -425,33 +416,15 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
                 continue;
             }
         } else if cur != EMPTY {
-            let (start, count) = leaf_range(cur);
-            let mut todo = active;
-            while todo != 0 {
-                let r = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                let q = &rays[r];
-                let lr = &*leaf_ray[r].get_or_insert_with(|| LeafRay::new(&q.ray));
-                for b in &tris[start..start + count] {
-                    if S::ENABLED {
-                        n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
-                    }
-                    let blocked = lr.triangles(bt, b, q.tmin, q.tmax, skip_of(r)).0 != 0
-                        || (b.has_other()
-                            && b.ids.iter().any(|&id| {
-                                id != NO_ITEM
-                                    && id & OTHER != 0
-                                    && fallback
-                                        .intersect(id & !OTHER, &q.ray, q.tmin, q.tmax)
-                                        .is_some()
-                            }));
-                    if blocked {
-                        hit |= 1 << r;
-                        open &= !(1 << r);
-                        break;
-                    }
+            each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
+                let range = (q.tmin, q.tmax);
+                let (blocked, tests) = tree.blocked_in_leaf::<S, _>(bt, cur, lr, range, skip_of(r));
+                n_tests += tests;
+                if blocked {
+                    hit |= 1 << r;
+                    open &= !(1 << r);
                 }
-            }
+            });
         }
         active = 0;
         while sp > 0 && open != 0 {

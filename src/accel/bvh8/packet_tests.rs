@@ -2,7 +2,7 @@
 //! own walk gets, bit for bit.
 
 use super::*;
-use crate::accel::bvh8::{dispatch, Bvh8};
+use crate::accel::bvh8::Bvh8;
 use crate::accel::testutil::{ray, soup, sphere, terrain, terrain_ray, Rng};
 use crate::math::Vec3;
 use crate::primitive::Primitive;
@@ -135,7 +135,7 @@ fn camera_tiles_and_shadow_rays_agree_on_a_terrain() {
 #[test]
 fn ties_go_to_the_smallest_id_in_every_walk() {
     use crate::accel::testutil::prim;
-    use crate::accel::{Aggregate, Brute};
+    use crate::accel::{Aggregate, Brute, Query};
     use crate::shape::{Shape, Triangle};
     let mut prims = soup(12, 2000);
     let t = Triangle::new(
@@ -173,7 +173,7 @@ fn ties_go_to_the_smallest_id_in_every_walk() {
     let (mut tris, mut spheres) = (0, 0);
     for q in packets.iter().flatten() {
         let single = b.closest(&prims[..], &q.ray, q.tmin, q.tmax, &mut NoStats);
-        let want = brute.intersect(&prims, &q.ray, q.tmin, q.tmax, &mut c);
+        let want = brute.intersect(Query::new(&prims, &q.ray, q.tmin, q.tmax), &mut c);
         assert_eq!(single, want.map(|h| (h.t, h.prim)), "{q:?}");
         match single {
             Some((_, id)) if id == copies[0] as u32 => tris += 1,
@@ -189,19 +189,7 @@ fn ties_go_to_the_smallest_id_in_every_walk() {
 /// through, with the deep stack.
 #[test]
 fn deep_trees_take_the_deep_stack_in_packets() {
-    use crate::accel::testutil::prim;
-    use crate::shape::{Shape, Triangle};
-    let prims: Vec<Primitive> = (0..400)
-        .map(|k| {
-            let x = 1.2f32.powi(k);
-            let v = |y: f32, z: f32| Vec3::new(x, y, z);
-            prim(Shape::Triangle(Triangle::new(
-                v(-0.5, 1.0),
-                v(1.0, 1.0),
-                v(1.0, -0.5),
-            )))
-        })
-        .collect();
+    let prims = crate::accel::testutil::chain(400);
     let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
     assert!(b.deep);
     let packets: Vec<Vec<PacketRay>> = (0..4)
@@ -254,28 +242,6 @@ fn packets_skip_each_rays_own_triangle() {
         }
     }
     assert!(blocked > 50, "{blocked}");
-}
-
-/// The portable copy of the packet walks answers as the dispatched one
-/// (the AVX2 copy here).
-#[test]
-fn the_portable_packet_copy_answers_as_the_dispatched_one() {
-    let prims = soup(9, 2000);
-    let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
-    let (nodes, tris, fb) = (&b.nodes, &b.tris, prims.as_slice());
-    let mut r = Rng::new(10);
-    for _ in 0..300 {
-        let p: Vec<PacketRay> = (0..PACKET).map(|_| pr(ray(&mut r), 0.0, 3.0)).collect();
-        for deep in [false, true] {
-            let (mut a, mut c) = ([None; PACKET], [None; PACKET]);
-            dispatch::closest8(nodes, tris, fb, &p, &mut a, &mut NoStats, deep);
-            dispatch::portable_closest8(nodes, tris, fb, &p, &mut c, &mut NoStats, deep);
-            assert_eq!(a, c);
-            let x = dispatch::any8(nodes, tris, fb, &p, &[], &mut NoStats, deep);
-            let y = dispatch::portable_any8(nodes, tris, fb, &p, &[], &mut NoStats, deep);
-            assert_eq!(x, y);
-        }
-    }
 }
 
 /// The packet's one box test keeps every box some ray's own test (the

@@ -36,6 +36,122 @@ impl Fallback for TrianglesOnly {
     }
 }
 
+/// The tree a walk runs through: its nodes and leaf blocks, how items that
+/// are not triangles are tested, and which stack its depth needs. What
+/// every walk (single ray or packet, closest or any hit) takes along.
+pub(crate) struct Tree<'a, F: ?Sized> {
+    pub nodes: &'a [Node],
+    pub tris: &'a [Tri4],
+    pub fallback: &'a F,
+    /// Deeper than [`SHALLOW_DEPTH`]: walks take the [`DEEP`] stack.
+    pub deep: bool,
+}
+
+impl<F: ?Sized> Clone for Tree<'_, F> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<F: ?Sized> Copy for Tree<'_, F> {}
+
+impl<'a, F: Fallback + ?Sized> Tree<'a, F> {
+    /// Inner node `c`, counted in `n_nodes` when `S` keeps statistics.
+    #[inline(always)]
+    pub(crate) fn node<S: TraversalStats>(&self, c: u32, n_nodes: &mut u64) -> &'a Node {
+        if S::ENABLED {
+            *n_nodes += 1;
+        }
+        &self.nodes[c as usize]
+    }
+
+    /// The blocks of leaf `c`.
+    #[inline(always)]
+    pub(crate) fn leaf(&self, c: u32) -> &'a [Tri4] {
+        let (start, count) = leaf_range(c);
+        &self.tris[start..start + count]
+    }
+
+    /// Starts loading child `c` (a node or its leaf's first block): a node
+    /// with several children hit prefetches each as it pushes or sorts it,
+    /// so that the nearest one's load and the others' overlap (one pass
+    /// over the mask: a separate prefetch pass cost the any-hit walk 7%
+    /// more instructions).
+    #[inline(always)]
+    pub(crate) fn prefetch_child(&self, c: u32) {
+        if !is_leaf(c) {
+            if let Some(n) = self.nodes.get(c as usize) {
+                prefetch(n);
+            }
+        } else if let Some(b) = self.tris.get(leaf_range(c).0) {
+            prefetch(b);
+        }
+    }
+
+    /// Leaf `c` for a closest-hit walk: each block's triangles (in `(tmin,
+    /// test_tmax]`), then its other items, each kept by
+    /// [`Nearest::closer`]. Returns the items tested (0 unless
+    /// `S::ENABLED`).
+    #[inline(always)]
+    pub(crate) fn nearest_in_leaf<S: TraversalStats, B: BoxTest>(
+        &self,
+        bt: B,
+        c: u32,
+        lr: &LeafRay,
+        tmin: f32,
+        near: &mut Nearest,
+    ) -> u64 {
+        let mut tests = 0;
+        for b in self.leaf(c) {
+            if S::ENABLED {
+                tests += b.items();
+            }
+            let (mut mask, t, bary) = lr.triangles(bt, b, tmin, near.test_tmax(), NO_ITEM);
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                near.offer(t[i], b.ids[i], Some([bary[0][i], bary[1][i], bary[2][i]]));
+            }
+            if b.has_other() {
+                for id in b.others() {
+                    if let Some(t) = self.fallback.intersect(id, lr.ray, tmin, near.test_tmax()) {
+                        near.offer(t, id, None);
+                    }
+                }
+            }
+        }
+        tests
+    }
+
+    /// Leaf `c` for an any-hit walk: whether an item but `skip` lies on the
+    /// ray in `(tmin, tmax)`, stopping at the first block that holds one;
+    /// and the items tested up to there (0 unless `S::ENABLED`).
+    #[inline(always)]
+    pub(crate) fn blocked_in_leaf<S: TraversalStats, B: BoxTest>(
+        &self,
+        bt: B,
+        c: u32,
+        lr: &LeafRay,
+        (tmin, tmax): (f32, f32),
+        skip: u32,
+    ) -> (bool, u64) {
+        let mut tests = 0;
+        for b in self.leaf(c) {
+            if S::ENABLED {
+                tests += b.items();
+            }
+            if lr.triangles(bt, b, tmin, tmax, skip).0 != 0
+                || (b.has_other()
+                    && b.others()
+                        .any(|id| self.fallback.intersect(id, lr.ray, tmin, tmax).is_some()))
+            {
+                return (true, tests);
+            }
+        }
+        (false, tests)
+    }
+}
+
 /// Everything a ray needs at every node, computed once per ray (what it
 /// needs at leaves is a [`LeafRay`]).
 pub(crate) struct RayData {
@@ -65,7 +181,10 @@ pub(crate) const ANY_OCTANT: usize = 8;
 /// and the same splatted for the four-lane pre-test. Made at the first leaf
 /// a ray reaches: many rays (shadow rays from the floor, camera rays past
 /// the mesh) never reach one.
-pub(crate) struct LeafRay {
+pub(crate) struct LeafRay<'r> {
+    /// The ray itself (for the fallback's items), by reference: a copy
+    /// made every query's `Option<LeafRay>` larger to set up.
+    ray: &'r Ray,
     wt: WatertightRay,
     w4: WatertightRay4,
 }
@@ -302,11 +421,12 @@ impl RayData {
     }
 }
 
-impl LeafRay {
+impl<'r> LeafRay<'r> {
     #[inline(always)]
-    pub(crate) fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &'r Ray) -> Self {
         let wt = WatertightRay::new(ray);
         LeafRay {
+            ray,
             wt,
             w4: WatertightRay4::new(&wt),
         }
@@ -437,29 +557,12 @@ fn lanes_of(b: &Tri4, id: u32) -> u32 {
         .bitmask()
 }
 
-/// Starts loading child `c` (a node or its leaf's first block): a node
-/// with several children hit prefetches each as it pushes or sorts it, so
-/// that the nearest one's load and the others' overlap (one pass over the
-/// mask: a separate prefetch pass cost the any-hit walk 7% more
-/// instructions).
-#[inline(always)]
-pub(crate) fn prefetch_child(nodes: &[Node], tris: &[Tri4], c: u32) {
-    if !is_leaf(c) {
-        if let Some(n) = nodes.get(c as usize) {
-            prefetch(n);
-        }
-    } else if let Some(b) = tris.get(leaf_range(c).0) {
-        prefetch(b);
-    }
-}
-
 /// Pushes the children in `mask` (at least two) far to near and returns the
 /// nearest, so that the nearest is visited first and the others are popped
-/// in order of distance; starts loading each ([`prefetch_child`]).
+/// in order of distance; starts loading each ([`Tree::prefetch_child`]).
 #[inline(always)]
-fn order(
-    nodes: &[Node],
-    tris: &[Tri4],
+fn order<F: Fallback + ?Sized>(
+    tree: &Tree<F>,
     node: &Node,
     mut mask: u32,
     dist: Lanes,
@@ -479,8 +582,8 @@ fn order(
             second.trailing_zeros() as usize,
         );
         let (a, b) = ((node.child[i], dist[i]), (node.child[j], dist[j]));
-        prefetch_child(nodes, tris, a.0);
-        prefetch_child(nodes, tris, b.0);
+        tree.prefetch_child(a.0);
+        tree.prefetch_child(b.0);
         let (near, far) = if a.1 < b.1 { (a, b) } else { (b, a) };
         stack[*sp] = far;
         *sp += 1;
@@ -491,15 +594,9 @@ fn order(
     while mask != 0 {
         let i = mask.trailing_zeros() as usize;
         mask &= mask - 1;
-        // Insertion sort, far first.
         let e = (node.child[i], dist[i]);
-        prefetch_child(nodes, tris, e.0);
-        let mut j = k;
-        while j > 0 && kids[j - 1].1 < e.1 {
-            kids[j] = kids[j - 1];
-            j -= 1;
-        }
-        kids[j] = e;
+        tree.prefetch_child(e.0);
+        insert_far_first(&mut kids, k, e, |e| e.1);
         k += 1;
     }
     for &e in &kids[..k - 1] {
@@ -507,6 +604,19 @@ fn order(
         *sp += 1;
     }
     kids[k - 1].0
+}
+
+/// Inserts `e` into `kids[..k]` (one step of an insertion sort), kept far
+/// to near by `dist`; `e` goes after (nearer than) the entries as far as
+/// it.
+#[inline(always)]
+pub(crate) fn insert_far_first<T: Copy>(kids: &mut [T], k: usize, e: T, dist: impl Fn(&T) -> f32) {
+    let mut j = k;
+    while j > 0 && dist(&kids[j - 1]) < dist(&e) {
+        kids[j] = kids[j - 1];
+        j -= 1;
+    }
+    kids[j] = e;
 }
 
 /// The closest hit of a traversal: its parameter, its item id, and, for a
@@ -519,74 +629,50 @@ pub(crate) struct Closest {
     pub bary: Option<[f32; 3]>,
 }
 
-/// The upper end of the range a leaf tests once `best` is found: `tmax`
-/// itself (`best` is the closest so far, at `tmax`) taken inclusively, so
-/// that a hit at exactly the same `t` is seen and [`closer`] can break the
-/// tie. Hits are at `t > tmin ≥ −∞` and finite, and the next float above a
-/// finite `t` is the bit pattern one up for `t > 0` (`+inf` above the
-/// largest finite value); for `t ≤ 0` (a negative `tmin`) `next_up` is
-/// exact too.
-#[inline(always)]
-pub(crate) fn test_tmax(best: &Option<Closest>, tmax: f32) -> f32 {
-    if best.is_some() {
-        tmax.next_up()
-    } else {
-        tmax
-    }
+/// A closest-hit walk's best hit so far and the upper end of its range,
+/// which shrinks to that hit's `t`.
+pub(crate) struct Nearest {
+    pub tmax: f32,
+    pub best: Option<Closest>,
 }
 
-/// Whether a hit `(t, id)` replaces `best` (at `tmax`): nearer, or as near
-/// with a smaller item id. The rule makes the closest hit a function of
-/// the ray and the set of items alone, not of the order the walk meets
-/// them in (brute force's order, by id, gives the same answer): a packet
-/// walk, which visits a ray's nodes in a different order than that ray's
-/// own walk, returns the very same hit.
-#[inline(always)]
-pub(crate) fn closer(best: &Option<Closest>, tmax: f32, t: f32, id: u32) -> bool {
-    match best {
-        None => true,
-        Some(b) => t < tmax || (t == tmax && id < b.id),
-    }
-}
-
-/// One leaf block for a closest-hit walk: its triangles (in `(tmin,
-/// test_tmax]`), then its other items, each kept by [`closer`]; `tmax`
-/// shrinks to the best hit's `t`.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub(crate) fn leaf_block<B: BoxTest, F: Fallback + ?Sized>(
-    bt: B,
-    lr: &LeafRay,
-    b: &Tri4,
-    fallback: &F,
-    ray: &Ray,
-    tmin: f32,
-    tmax: &mut f32,
-    best: &mut Option<Closest>,
-) {
-    let (mut mask, t, bary) = lr.triangles(bt, b, tmin, test_tmax(best, *tmax), NO_ITEM);
-    while mask != 0 {
-        let i = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
-        if closer(best, *tmax, t[i], b.ids[i]) {
-            *tmax = t[i];
-            *best = Some(Closest {
-                t: t[i],
-                id: b.ids[i],
-                bary: Some([bary[0][i], bary[1][i], bary[2][i]]),
-            });
+impl Nearest {
+    /// The upper end of the range a leaf tests once `best` is found: `tmax`
+    /// itself (`best` is the closest so far, at `tmax`) taken inclusively,
+    /// so that a hit at exactly the same `t` is seen and
+    /// [`closer`](Self::closer) can break the tie. Hits are at `t > tmin ≥
+    /// −∞` and finite, and the next float above a finite `t` is the bit
+    /// pattern one up for `t > 0` (`+inf` above the largest finite value);
+    /// for `t ≤ 0` (a negative `tmin`) `next_up` is exact too.
+    #[inline(always)]
+    pub(crate) fn test_tmax(&self) -> f32 {
+        if self.best.is_some() {
+            self.tmax.next_up()
+        } else {
+            self.tmax
         }
     }
-    if b.has_other() {
-        for &id in &b.ids {
-            if id != NO_ITEM && id & OTHER != 0 {
-                let id = id & !OTHER;
-                let hit = fallback.intersect(id, ray, tmin, test_tmax(best, *tmax));
-                if let Some(t) = hit.filter(|&t| closer(best, *tmax, t, id)) {
-                    *tmax = t;
-                    *best = Some(Closest { t, id, bary: None });
-                }
-            }
+
+    /// Whether a hit `(t, id)` replaces `best` (at `tmax`): nearer, or as
+    /// near with a smaller item id. The rule makes the closest hit a
+    /// function of the ray and the set of items alone, not of the order the
+    /// walk meets them in (brute force's order, by id, gives the same
+    /// answer): a packet walk, which visits a ray's nodes in a different
+    /// order than that ray's own walk, returns the very same hit.
+    #[inline(always)]
+    pub(crate) fn closer(&self, t: f32, id: u32) -> bool {
+        match self.best {
+            None => true,
+            Some(b) => t < self.tmax || (t == self.tmax && id < b.id),
+        }
+    }
+
+    /// Keeps hit `(t, id)` if it is [`closer`](Self::closer).
+    #[inline(always)]
+    fn offer(&mut self, t: f32, id: u32, bary: Option<[f32; 3]>) {
+        if self.closer(t, id) {
+            self.tmax = t;
+            self.best = Some(Closest { t, id, bary });
         }
     }
 }
@@ -594,7 +680,6 @@ pub(crate) fn leaf_block<B: BoxTest, F: Fallback + ?Sized>(
 /// The closest hit ([`Closest`]), with an `N`-entry stack ([`SHALLOW`]
 /// or [`DEEP`] for the tree's depth). Always inlined, so that `dispatch`'s
 /// AVX2 copy compiles it with AVX2.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn closest<
     S: TraversalStats,
@@ -605,20 +690,17 @@ pub(crate) fn closest<
     const I: bool,
 >(
     bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
+    tree: &Tree<F>,
     rd: &RayData,
     tmin: f32,
     tmax: f32,
     stats: &mut S,
 ) -> Option<Closest> {
-    if nodes.is_empty() {
+    if tree.nodes.is_empty() {
         return None;
     }
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
-    let mut best: Option<Closest> = None;
-    let mut tmax = tmax;
+    let mut near = Nearest { tmax, best: None };
     let tmin4 = Lanes::splat(tmin);
     debug_assert!(!I || rd.reduce_as_ints(tmin));
     let mut stack = [(0u32, 0f32); N];
@@ -628,38 +710,29 @@ pub(crate) fn closest<
     let mut cur = 0u32;
     loop {
         if !is_leaf(cur) {
-            let node = &nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
-            let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(tmax));
+            let node = tree.node::<S>(cur, &mut n_nodes);
+            let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(near.tmax));
             if mask != 0 {
                 cur = if mask & (mask - 1) == 0 {
                     node.child[mask.trailing_zeros() as usize]
                 } else {
-                    order(nodes, tris, node, mask, dist, &mut stack, &mut sp)
+                    order(tree, node, mask, dist, &mut stack, &mut sp)
                 };
                 continue;
             }
         } else if cur != EMPTY {
-            let (start, count) = leaf_range(cur);
             let lr = &*leaf_ray.get_or_insert_with(|| LeafRay::new(&rd.ray));
-            for b in &tris[start..start + count] {
-                if S::ENABLED {
-                    n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
-                }
-                leaf_block(bt, lr, b, fallback, &rd.ray, tmin, &mut tmax, &mut best);
-            }
+            n_tests += tree.nearest_in_leaf::<S, _>(bt, cur, lr, tmin, &mut near);
         }
         // Pop the nearest pending child that can still hold a closer hit.
         loop {
             if sp == 0 {
                 stats.add(n_nodes, n_tests);
-                return best;
+                return near.best;
             }
             sp -= 1;
             let (r, d) = stack[sp];
-            if d <= tmax {
+            if d <= near.tmax {
                 cur = r;
                 break;
             }
@@ -671,7 +744,6 @@ pub(crate) fn closest<
 /// stops at the first hit. `skip` is a triangle the caller knows cannot
 /// block the ray (the one it leaves; [`NO_ITEM`] for none): its lanes are
 /// not tested. Always inlined (see [`closest`]).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn any<
     S: TraversalStats,
@@ -682,16 +754,13 @@ pub(crate) fn any<
     const I: bool,
 >(
     bt: B,
-    nodes: &[Node],
-    tris: &[Tri4],
-    fallback: &F,
+    tree: &Tree<F>,
     rd: &RayData,
-    tmin: f32,
-    tmax: f32,
+    (tmin, tmax): (f32, f32),
     skip: u32,
     stats: &mut S,
 ) -> bool {
-    if nodes.is_empty() {
+    if tree.nodes.is_empty() {
         return false;
     }
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
@@ -702,12 +771,9 @@ pub(crate) fn any<
     // Made at the first leaf (see `LeafRay`).
     let mut leaf_ray = None;
     let mut cur = 0u32;
-    let hit = 'walk: loop {
+    let hit = loop {
         if !is_leaf(cur) {
-            let node = &nodes[cur as usize];
-            if S::ENABLED {
-                n_nodes += 1;
-            }
+            let node = tree.node::<S>(cur, &mut n_nodes);
             // No ordering: any occluder ends the walk, and sorting costs
             // more than it saves for shadow rays.
             let (mut mask, _) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
@@ -717,10 +783,10 @@ pub(crate) fn any<
                 if mask != 0 {
                     // Several children: start loading them all, pushing
                     // the others in the same pass.
-                    prefetch_child(nodes, tris, cur);
+                    tree.prefetch_child(cur);
                     while mask != 0 {
                         let c = node.child[mask.trailing_zeros() as usize];
-                        prefetch_child(nodes, tris, c);
+                        tree.prefetch_child(c);
                         stack[sp] = c;
                         sp += 1;
                         mask &= mask - 1;
@@ -729,26 +795,11 @@ pub(crate) fn any<
                 continue;
             }
         } else if cur != EMPTY {
-            let (start, count) = leaf_range(cur);
             let lr = &*leaf_ray.get_or_insert_with(|| LeafRay::new(&rd.ray));
-            for b in &tris[start..start + count] {
-                if S::ENABLED {
-                    n_tests += b.ids.iter().filter(|&&id| id != NO_ITEM).count() as u64;
-                }
-                if lr.triangles(bt, b, tmin, tmax, skip).0 != 0 {
-                    break 'walk true;
-                }
-                if b.has_other()
-                    && b.ids.iter().any(|&id| {
-                        id != NO_ITEM
-                            && id & OTHER != 0
-                            && fallback
-                                .intersect(id & !OTHER, &rd.ray, tmin, tmax)
-                                .is_some()
-                    })
-                {
-                    break 'walk true;
-                }
+            let (blocked, tests) = tree.blocked_in_leaf::<S, _>(bt, cur, lr, (tmin, tmax), skip);
+            n_tests += tests;
+            if blocked {
+                break true;
             }
         }
         if sp == 0 {

@@ -54,16 +54,18 @@ fn a_worst_case_tree_fills_the_deep_stack() {
         rd: &RayData,
         tmax: f32,
     ) -> Option<(Option<Closest>, bool)> {
-        let (f, s) = (&TrianglesOnly, &mut NoStats);
+        let s = &mut NoStats;
+        let tree = &Tree {
+            nodes,
+            tris,
+            fallback: &TrianglesOnly,
+            deep: true,
+        };
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            let hit =
-                closest::<_, _, _, N, ANY_OCTANT, true>(Portable, nodes, tris, f, rd, 0.0, tmax, s);
-            (
-                hit,
-                any::<_, _, _, N, ANY_OCTANT, true>(
-                    Portable, nodes, tris, f, rd, 0.0, tmax, NO_ITEM, s,
-                ),
-            )
+            let hit = closest::<_, _, _, N, ANY_OCTANT, true>(Portable, tree, rd, 0.0, tmax, s);
+            let range = (0.0, tmax);
+            let any = any::<_, _, _, N, ANY_OCTANT, true>(Portable, tree, rd, range, NO_ITEM, s);
+            (hit, any)
         }))
         .ok()
     }

@@ -1,7 +1,7 @@
 //! Building a grid: how many cells, and which primitives go in each.
 
 use super::{Grid, Lattice};
-use crate::accel::overlap::{margin, padded, shape_overlaps};
+use crate::accel::overlap::{bounds_of, covering, padded, shape_overlaps};
 use crate::math::Aabb;
 use crate::primitive::Primitive;
 
@@ -116,15 +116,8 @@ pub(crate) fn box_entries(prims: &[Primitive], ids: &[u32], lattice: &Lattice, m
 /// diagonal triangle is not listed in the empty cells of its box. Cells are
 /// filled by counting sort of (cell, id) pairs into offsets + a flat list.
 pub(super) fn build(prims: &[Primitive], ids: &[u32], fixed: Option<[u32; 3]>) -> Grid {
-    let bounds = ids
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
-    let m = margin(&bounds);
-    let padded_bounds = if bounds.is_empty() {
-        bounds
-    } else {
-        padded(&bounds, m)
-    };
+    let bounds = bounds_of(prims, ids);
+    let (padded_bounds, m) = covering(&bounds);
     let res = if bounds.is_empty() {
         [1, 1, 1]
     } else {
@@ -197,6 +190,7 @@ pub(crate) fn fill(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::overlap::margin;
     use crate::accel::testutil::{sphere, Rng};
     use crate::math::Vec3;
 

@@ -15,7 +15,7 @@ mod traverse;
 pub use traverse::{Cell, CellWalk, Face};
 
 use super::mailbox::ItemTests;
-use super::{Aggregate, PrimHit};
+use super::{Aggregate, PrimHit, Query};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::stats::Counters;
@@ -131,26 +131,19 @@ impl Grid {
     /// visitor that does nothing, and the traversal views record with it.
     pub fn intersect_visiting(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
         mut visit: impl FnMut(&Cell),
     ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut t_best = tmax;
-        let mut tests = ItemTests::new(prims, ray, tmin, self.mailbox);
-        for cell in self.walk(ray, tmin, tmax) {
+        let mut tests = ItemTests::new(q, self.mailbox);
+        for cell in self.walk(q.ray, q.tmin, q.tmax) {
             c.nodes_visited += 1;
             visit(&cell);
-            tests.closest(self.cell_items(cell.index), &mut best, &mut t_best, c);
-            // Accepted only now: nothing in a later cell can be closer.
-            if t_best <= cell.t_exit {
+            if tests.closest_in(self.cell_items(cell.index), cell.t_exit, c) {
                 break;
             }
         }
-        best
+        tests.best()
     }
 
     /// Turns mailboxing off (on by default), to measure what it saves.
@@ -160,29 +153,15 @@ impl Grid {
 }
 
 impl Aggregate for Grid {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        self.intersect_visiting(q, c, |_| {})
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        let mut tests = ItemTests::new(prims, ray, tmin, self.mailbox);
-        self.walk(ray, tmin, tmax).any(|cell| {
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        let mut tests = ItemTests::new(q, self.mailbox);
+        self.walk(q.ray, q.tmin, q.tmax).any(|cell| {
             c.nodes_visited += 1;
-            tests.any(self.cell_items(cell.index), tmax, c)
+            tests.any(self.cell_items(cell.index), c)
         })
     }
 
@@ -203,7 +182,9 @@ impl Aggregate for Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::testutil::{assert_agrees, assert_agrees_on, ray, soup, sphere, Rng};
+    use crate::accel::testutil::{
+        assert_agrees, assert_agrees_on, first_hit, ray, soup, sphere, Rng,
+    };
 
     fn all(prims: &[Primitive]) -> Vec<u32> {
         (0..prims.len() as u32).collect()
@@ -251,25 +232,16 @@ mod tests {
         ];
         let g = Grid::new(&prims, all(&prims), Some([12, 1, 1]));
         let r = Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::X);
-        let h = g
-            .intersect(&prims, &r, 0.0, f32::INFINITY, &mut Counters::default())
-            .unwrap();
+        let h = first_hit(&g, &prims, &r).unwrap();
         assert_eq!(h.prim, 0);
         assert!((h.t - 1.5).abs() < 1e-5);
         let r = Ray::new(Vec3::new(3.0, 0.0, -3.0), Vec3::Z);
-        let h = g
-            .intersect(&prims, &r, 0.0, f32::INFINITY, &mut Counters::default())
-            .unwrap();
+        let h = first_hit(&g, &prims, &r).unwrap();
         assert_eq!(h.prim, 1);
     }
 
     #[test]
-    fn empty_and_flat_grids() {
-        let g = Grid::new(&[], vec![], None);
-        let r = Ray::new(Vec3::ZERO, Vec3::X);
-        assert!(g
-            .intersect(&[], &r, 0.0, f32::INFINITY, &mut Counters::default())
-            .is_none());
+    fn flat_grids() {
         // All triangles in the plane z = 1: one layer of cells.
         let mut rng = Rng::new(3);
         let prims: Vec<Primitive> = (0..100)
@@ -335,7 +307,7 @@ mod tests {
             let mut c = Counters::default();
             let hits: Vec<Option<PrimHit>> = rays
                 .iter()
-                .map(|r| g.intersect(&prims, r, 0.0, f32::INFINITY, &mut c))
+                .map(|r| g.intersect(Query::new(&prims, r, 0.0, f32::INFINITY), &mut c))
                 .collect();
             (hits, c.intersection_tests)
         };

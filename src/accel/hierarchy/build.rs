@@ -3,7 +3,7 @@
 //! meshes and wide groups) → the flat node array.
 
 use super::{HierarchyBvh, Kind, Node, SceneTree, MAX_CHILDREN, MAX_LEAF, NO_SPACE};
-use crate::accel::overlap::{margin, padded};
+use crate::accel::overlap::{bounds_of, margin, padded};
 use crate::math::{Aabb, Mat4, Vec3};
 use crate::primitive::Primitive;
 use crate::shape::Shape;
@@ -221,9 +221,7 @@ fn flatten(d: Draft, k: usize, depth: usize, out: &mut HierarchyBvh) {
 }
 
 pub(super) fn build(prims: &[Primitive], ids: &[u32], tree: &SceneTree) -> HierarchyBvh {
-    let bounds = ids
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+    let bounds = bounds_of(prims, ids);
     let mut wanted = vec![false; prims.len()];
     for &i in ids {
         wanted[i as usize] = true;

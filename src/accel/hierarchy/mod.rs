@@ -29,8 +29,8 @@
 mod build;
 mod traverse;
 
-use super::{Aggregate, PrimHit};
-use crate::math::{Aabb, Mat4, Ray};
+use super::{Aggregate, PrimHit, Query};
+use crate::math::{Aabb, Mat4};
 use crate::primitive::Primitive;
 use crate::stats::Counters;
 use std::ops::Range;
@@ -130,14 +130,11 @@ impl HierarchyBvh {
     /// a visitor that does nothing), which the traversal views record.
     pub fn intersect_visiting(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
         mut visit: impl FnMut(&BoxVisit),
     ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c, |k, entered| {
+        traverse::closest(self, q, c, |k, entered| {
             let n = &self.nodes[k as usize];
             visit(&BoxVisit {
                 bounds: n.bounds,
@@ -160,26 +157,12 @@ pub struct BoxVisit {
 }
 
 impl Aggregate for HierarchyBvh {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        traverse::closest(self, prims, ray, tmin, tmax, c, |_, _| {})
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        traverse::closest(self, q, c, |_, _| {})
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        traverse::any(self, prims, ray, tmin, tmax, c)
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        traverse::any(self, q, c)
     }
 
     fn bounds(&self) -> Aabb {

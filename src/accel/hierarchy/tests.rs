@@ -1,7 +1,7 @@
 use super::*;
 use crate::accel::testutil::{assert_agrees, prim, ray, soup, Rng};
 use crate::accel::Brute;
-use crate::math::Vec3;
+use crate::math::{Ray, Vec3};
 use crate::shape::{Shape, Sphere, Transformed, Triangle};
 
 fn all(prims: &[Primitive]) -> Vec<u32> {
@@ -63,8 +63,8 @@ fn ids_outside_the_tree_are_kept_and_others_left_out() {
         let q = ray(&mut r);
         let mut c = Counters::default();
         assert_eq!(
-            brute.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c),
-            h.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c)
+            brute.intersect(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c),
+            h.intersect(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c)
         );
     }
 }
@@ -124,11 +124,14 @@ fn a_transform_node_carries_the_ray_once() {
     for _ in 0..3000 {
         let q = ray(&mut r);
         let mut c = Counters::default();
-        let want = brute.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c);
-        assert_eq!(want, h.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c));
+        let want = brute.intersect(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c);
         assert_eq!(
-            brute.occluded(&prims, &q, 0.1, 5.0, &mut c),
-            h.occluded(&prims, &q, 0.1, 5.0, &mut c)
+            want,
+            h.intersect(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c)
+        );
+        assert_eq!(
+            brute.occluded(Query::new(&prims, &q, 0.1, 5.0), &mut c),
+            h.occluded(Query::new(&prims, &q, 0.1, 5.0), &mut c)
         );
         hits += want.is_some() as u32;
     }
@@ -149,10 +152,6 @@ fn a_transform_node_carries_the_ray_once() {
 fn empty_tree_and_no_ids() {
     let h = HierarchyBvh::new(&[], vec![], &SceneTree::Group(vec![]));
     assert_eq!(h.node_count(), 0);
-    let q = Ray::new(Vec3::ZERO, Vec3::X);
-    assert!(h
-        .intersect(&[], &q, 0.0, f32::INFINITY, &mut Counters::default())
-        .is_none());
 }
 
 /// Depth of the deepest leaf below node `k`, walked from the node array.
@@ -205,9 +204,9 @@ fn reports_its_shape_and_visits_to_the_same_hit() {
     for _ in 0..300 {
         let q = ray(&mut r);
         let mut c = Counters::default();
-        let want = h.intersect(&prims, &q, 0.0, f32::INFINITY, &mut c);
+        let want = h.intersect(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c);
         let mut entered = 0;
-        let got = h.intersect_visiting(&prims, &q, 0.0, f32::INFINITY, &mut c, |v| {
+        let got = h.intersect_visiting(Query::new(&prims, &q, 0.0, f32::INFINITY), &mut c, |v| {
             entered += usize::from(v.entered);
             leaves += usize::from(v.leaf && v.entered);
         });
@@ -240,9 +239,7 @@ fn every_box_is_the_union_of_what_lies_below() {
                 }
                 Kind::Leaf { start, count, .. } => {
                     let ids = &h.ids[start as usize..(start + count) as usize];
-                    let b = ids
-                        .iter()
-                        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
+                    let b = crate::accel::overlap::bounds_of(&prims, ids);
                     assert_eq!(node.bounds.union(&b), node.bounds);
                     continue;
                 }
@@ -255,7 +252,7 @@ fn every_box_is_the_union_of_what_lies_below() {
         let mut c = Counters::default();
         let miss = Ray::new(Vec3::new(0.0, 100.0, 0.0), Vec3::X);
         assert!(h
-            .intersect(&prims, &miss, 0.0, f32::INFINITY, &mut c)
+            .intersect(Query::new(&prims, &miss, 0.0, f32::INFINITY), &mut c)
             .is_none());
         assert_eq!(c.nodes_visited, 1);
     }
@@ -312,7 +309,7 @@ fn a_group_behind_the_hit_is_not_opened() {
         let h = HierarchyBvh::new(&prims, all(&prims), &tree);
         let mut c = Counters::default();
         let ray = Ray::new(Vec3::new(-5.0, 0.0, 0.1), Vec3::X);
-        let hit = h.intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c);
+        let hit = h.intersect(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c);
         assert!(hit.is_some_and(|h| h.prim < 8 && h.t < 5.0));
         c.nodes_visited
     };
@@ -336,10 +333,10 @@ fn counters_count_every_box_and_every_test() {
     let ray = Ray::new(Vec3::new(-5.0, 0.45, 0.45), Vec3::X);
     let mut c = Counters::default();
     assert!(h
-        .intersect(&prims, &ray, 0.0, f32::INFINITY, &mut c)
+        .intersect(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c)
         .is_none());
     assert_eq!((c.nodes_visited, c.intersection_tests), (3, 6));
     let mut c = Counters::default();
-    assert!(!h.occluded(&prims, &ray, 0.0, f32::INFINITY, &mut c));
+    assert!(!h.occluded(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c));
     assert_eq!((c.nodes_visited, c.intersection_tests), (3, 6));
 }

@@ -8,9 +8,8 @@
 //! array would need a limit), reused by every ray of the thread.
 
 use super::{HierarchyBvh, Kind, MAX_CHILDREN, NO_SPACE};
-use crate::accel::PrimHit;
+use crate::accel::{PrimHit, Query};
 use crate::math::Ray;
-use crate::primitive::Primitive;
 use crate::shape::Shape;
 use crate::stats::Counters;
 use std::cell::RefCell;
@@ -133,19 +132,19 @@ fn tested(shape: &Shape, object_space: bool) -> &Shape {
     }
 }
 
-/// Closest hit with `tmin < t < tmax`; `seen(node, entered)` for every box
+/// Closest hit of `q`; `seen(node, entered)` for every box
 /// tested.
 pub(super) fn closest(
     h: &HierarchyBvh,
-    prims: &[Primitive],
-    ray: &Ray,
-    tmin: f32,
-    tmax: f32,
+    q: Query,
     c: &mut Counters,
     seen: impl FnMut(u32, bool),
 ) -> Option<PrimHit> {
+    let Query {
+        prims, ray, tmin, ..
+    } = q;
     let mut best = None;
-    let mut t_best = tmax;
+    let mut t_best = q.tmax;
     walk(
         h,
         ray,
@@ -168,17 +167,13 @@ pub(super) fn closest(
     best
 }
 
-/// Whether anything lies on the ray with `tmin < t < tmax`.
-pub(super) fn any(
-    h: &HierarchyBvh,
-    prims: &[Primitive],
-    ray: &Ray,
-    tmin: f32,
-    tmax: f32,
-    c: &mut Counters,
-) -> bool {
+/// Whether anything lies on the ray of `q` in its range.
+pub(super) fn any(h: &HierarchyBvh, q: Query, c: &mut Counters) -> bool {
+    let Query {
+        prims, ray, tmin, ..
+    } = q;
     let mut hit = false;
-    let mut t_limit = tmax;
+    let mut t_limit = q.tmax;
     walk(
         h,
         ray,

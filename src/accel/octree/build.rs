@@ -1,21 +1,14 @@
 //! Building an octree: split while crowded, push primitives down.
 
 use super::{child_box, child_codes, split_axes, Node, Octree, Storage, LEAF_SIZE, MAX_DEPTH};
-use crate::accel::overlap::{margin, padded, shape_overlaps};
+use crate::accel::overlap::{bounds_of, covering, padded, shape_overlaps};
 use crate::math::Aabb;
 use crate::primitive::Primitive;
 
 /// Builds the tree over `ids`.
 pub(super) fn build(prims: &[Primitive], ids: &[u32], storage: Storage) -> Octree {
-    let bounds = ids
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(&prims[i as usize].bounds()));
-    let m = margin(&bounds);
-    let root = if bounds.is_empty() {
-        bounds
-    } else {
-        padded(&bounds, m)
-    };
+    let bounds = bounds_of(prims, ids);
+    let (root, m) = covering(&bounds);
     let mut b = Builder {
         prims,
         margin: m,

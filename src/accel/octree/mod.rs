@@ -41,7 +41,7 @@ pub enum Storage {
 }
 
 use super::mailbox::ItemTests;
-use super::{Aggregate, PrimHit};
+use super::{Aggregate, PrimHit, Query};
 use crate::math::{Aabb, Ray, Vec3};
 use crate::primitive::Primitive;
 use crate::stats::Counters;
@@ -170,27 +170,21 @@ impl Octree {
     /// a visitor that does nothing), which the traversal views record.
     pub fn intersect_visiting(
         &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
+        q: Query,
         c: &mut Counters,
         mut visit: impl FnMut(&Leaf),
     ) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
-        let mut t_best = tmax;
-        let mut tests = ItemTests::new(prims, ray, tmin, true);
-        let mut walk = self.walk(ray, tmin, tmax);
+        let mut tests = ItemTests::new(q, true);
+        let mut walk = self.walk(q.ray, q.tmin, q.tmax);
+        // Leaves come front to back: nothing later can beat a hit in one.
         for leaf in walk.by_ref() {
             visit(&leaf);
-            tests.closest(leaf.items, &mut best, &mut t_best, c);
-            // Leaves come front to back: nothing later can beat a hit in here.
-            if t_best <= leaf.t_exit {
+            if tests.closest_in(leaf.items, leaf.t_exit, c) {
                 break;
             }
         }
         c.nodes_visited += walk.visited;
-        best
+        tests.best()
     }
 
     /// The box the root covers (the primitives' bounds, padded).
@@ -243,28 +237,14 @@ impl Octree {
 }
 
 impl Aggregate for Octree {
-    fn intersect(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> Option<PrimHit> {
-        self.intersect_visiting(prims, ray, tmin, tmax, c, |_| {})
+    fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
+        self.intersect_visiting(q, c, |_| {})
     }
 
-    fn occluded(
-        &self,
-        prims: &[Primitive],
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        c: &mut Counters,
-    ) -> bool {
-        let mut tests = ItemTests::new(prims, ray, tmin, true);
-        let mut walk = self.walk(ray, tmin, tmax);
-        let hit = walk.by_ref().any(|leaf| tests.any(leaf.items, tmax, c));
+    fn occluded(&self, q: Query, c: &mut Counters) -> bool {
+        let mut tests = ItemTests::new(q, true);
+        let mut walk = self.walk(q.ray, q.tmin, q.tmax);
+        let hit = walk.by_ref().any(|leaf| tests.any(leaf.items, c));
         c.nodes_visited += walk.visited;
         hit
     }
@@ -311,16 +291,32 @@ mod tests {
         assert_agrees(&o, &prims, 500);
     }
 
-    #[test]
-    fn crowded_cells_split_and_primitives_live_in_leaves() {
-        // 64 small spheres on a 4×4×4 lattice: one split separates them into
-        // octants of 8, which stay leaves.
-        let prims: Vec<Primitive> = (0..64)
+    /// 64 small spheres on a 4×4×4 lattice.
+    fn lattice_of_64() -> Vec<Primitive> {
+        (0..64)
             .map(|i| {
                 let p = Vec3::new((i % 4) as f32, (i / 4 % 4) as f32, (i / 16) as f32);
                 sphere(p, 0.2)
             })
-            .collect();
+            .collect()
+    }
+
+    /// A root split on every axis, its children first, holding `count`
+    /// references itself.
+    fn root_split_in_8(count: u32) -> Node {
+        Node::Inner {
+            first: 1,
+            axes: 7,
+            start: 0,
+            count,
+        }
+    }
+
+    #[test]
+    fn crowded_cells_split_and_primitives_live_in_leaves() {
+        // 64 small spheres on a 4×4×4 lattice: one split separates them into
+        // octants of 8, which stay leaves.
+        let prims = lattice_of_64();
         let o = Octree::new(&prims, all(&prims));
         assert_eq!(o.node_count(), 9);
         assert_eq!(o.depth(), 1);
@@ -335,15 +331,7 @@ mod tests {
             assert!(leaf && d == 1);
             assert!((b.extent() - octant).abs().max_element() < 1e-5);
         }
-        assert_eq!(
-            o.nodes[0],
-            Node::Inner {
-                first: 1,
-                axes: 7,
-                start: 0,
-                count: 0
-            }
-        );
+        assert_eq!(o.nodes[0], root_split_in_8(0));
         assert_agrees(&o, &prims, 2000);
     }
 
@@ -456,23 +444,10 @@ mod tests {
     #[test]
     fn a_straddling_sphere_stays_at_the_root() {
         // 64 small spheres on a lattice plus one big sphere across the middle.
-        let mut prims: Vec<Primitive> = (0..64)
-            .map(|i| {
-                let p = Vec3::new((i % 4) as f32, (i / 4 % 4) as f32, (i / 16) as f32);
-                sphere(p, 0.2)
-            })
-            .collect();
+        let mut prims = lattice_of_64();
         prims.push(sphere(Vec3::splat(1.5), 0.3));
         let o = Octree::with_storage(&prims, all(&prims), Storage::Inner);
-        assert_eq!(
-            o.nodes[0],
-            Node::Inner {
-                first: 1,
-                axes: 7,
-                start: 0,
-                count: 1
-            }
-        );
+        assert_eq!(o.nodes[0], root_split_in_8(1));
         assert_eq!(o.items[0], 64);
         let leaf_items: Vec<Leaf> = o
             .walk(

@@ -190,13 +190,9 @@ fn measure_packets<P: AsRef<[PacketRay]> + Sync>(
     shadow: bool,
 ) -> (f64, Sums) {
     let sums = packet_pass(scene, packets, shadow);
-    let best = (0..3)
-        .map(|_| {
-            let t = Instant::now();
-            packet_pass(scene, packets, shadow);
-            t.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min);
+    let best = best_of_three(|| {
+        packet_pass(scene, packets, shadow);
+    });
     let rays: usize = packets.iter().map(|p| p.as_ref().len()).sum();
     (rays as f64 / best / 1e6, sums)
 }
@@ -204,14 +200,21 @@ fn measure_packets<P: AsRef<[PacketRay]> + Sync>(
 /// Warm-up, then the best of three: Mrays/s and the checksums.
 fn measure(scene: &MeshScene, rays: &[RayRec], shadow: bool) -> (f64, Sums) {
     let sums = pass(scene, rays, shadow);
-    let best = (0..3)
+    let best = best_of_three(|| {
+        pass(scene, rays, shadow);
+    });
+    (rays.len() as f64 / best / 1e6, sums)
+}
+
+/// Seconds of the fastest of three runs of `run` (run after a warm-up).
+fn best_of_three(mut run: impl FnMut()) -> f64 {
+    (0..3)
         .map(|_| {
             let t = Instant::now();
-            pass(scene, rays, shadow);
+            run();
             t.elapsed().as_secs_f64()
         })
-        .fold(f64::INFINITY, f64::min);
-    (rays.len() as f64 / best / 1e6, sums)
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Runs the benchmark and prints its report.

@@ -61,15 +61,7 @@ pub fn run(a: StructureArgs) -> Result<(), JobError> {
     } else {
         let camera =
             CameraModel::of_world(&world, &scene.effects).at_time(scene.effects.lens.shutter[0]);
-        let shading = Whitted {
-            shadows: true,
-            ..Whitted::default()
-        };
-        let (frame, _) = render(&world, &camera, &shading, (w, h), PixelOffset::CENTER);
-        let mut canvas = Canvas::new(w, h, frame.color);
-        canvas.dim(0.6);
-        traversal::draw(&mut canvas, &camera, &segments);
-        glint::output::write_rgb(output, w, h, &canvas.pixels)?;
+        write_over_render(output, &world, &camera, (w, h), &segments)?;
     }
     println!(
         "{accel}: {} nodes, depth {deepest}; drew {} boxes to {}",
@@ -85,4 +77,25 @@ impl StructureArgs {
     pub fn accel(&self) -> glint::accel::AccelKind {
         self.scene.accel
     }
+}
+
+/// Writes to `output` the line `segments` drawn over a dimmed render of
+/// `world` (Whitted shading with shadows) through `camera`, at `size`.
+pub(crate) fn write_over_render(
+    output: &std::path::Path,
+    world: &World,
+    camera: &CameraModel,
+    (w, h): (u32, u32),
+    segments: &[((glint::math::Vec3, glint::math::Vec3), glint::math::Vec3)],
+) -> Result<(), JobError> {
+    let shading = Whitted {
+        shadows: true,
+        ..Whitted::default()
+    };
+    let (frame, _) = render(world, camera, &shading, (w, h), PixelOffset::CENTER);
+    let mut canvas = Canvas::new(w, h, frame.color);
+    canvas.dim(0.6);
+    traversal::draw(&mut canvas, camera, segments);
+    glint::output::write_rgb(output, w, h, &canvas.pixels)?;
+    Ok(())
 }

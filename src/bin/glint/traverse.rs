@@ -4,10 +4,8 @@
 use crate::args::{ImageArgs, SceneArgs};
 use clap::Args;
 use glint::app::usage;
-use glint::integrator::Whitted;
 use glint::job::JobError;
-use glint::render::{render, screen_point, CameraModel, PixelOffset};
-use glint::viz::draw::Canvas;
+use glint::render::{screen_point, CameraModel, PixelOffset};
 use glint::viz::traversal::{self, Structure};
 use glint::world::{BuildOptions, World};
 
@@ -107,15 +105,7 @@ pub fn run(a: TraverseArgs) -> Result<(), JobError> {
             glint::output::write_file(output, (text + "\n").as_bytes())?;
         }
         _ => {
-            let shading = Whitted {
-                shadows: true,
-                ..Whitted::default()
-            };
-            let (frame, _) = render(&world, &camera, &shading, (w, h), PixelOffset::CENTER);
-            let mut canvas = Canvas::new(w, h, frame.color);
-            canvas.dim(0.6);
-            traversal::draw(&mut canvas, &camera, &segments);
-            glint::output::write_rgb(output, w, h, &canvas.pixels)?;
+            crate::structure::write_over_render(output, &world, &camera, (w, h), &segments)?;
         }
     }
     println!(

@@ -21,13 +21,9 @@ pub(super) fn read_ascii(
         line: first_line,
         line_start: 0,
     };
-    let mut v = Values {
-        scalars: Vec::new(),
-        list: Vec::new(),
-    };
+    let mut v = Values::default();
     for (e, (el, roles)) in h.elements.iter().zip(&h.roles).enumerate() {
-        v.scalars.clear();
-        v.scalars.resize(el.props.len(), 0.0);
+        v.start_element(el.props.len());
         for index in 0..el.count {
             let mut place = None;
             v.list.clear();

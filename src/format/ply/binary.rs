@@ -20,13 +20,9 @@ pub(super) fn read_binary(
         big,
     };
     let base = h.body_start;
-    let mut v = Values {
-        scalars: Vec::new(),
-        list: Vec::new(),
-    };
+    let mut v = Values::default();
     for (e, (el, roles)) in h.elements.iter().zip(&h.roles).enumerate() {
-        v.scalars.clear();
-        v.scalars.resize(el.props.len(), 0.0);
+        v.start_element(el.props.len());
         let all_skipped = roles.iter().all(|&r| r == Role::Skip);
         for index in 0..el.count {
             let start = r.pos;

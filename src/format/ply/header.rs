@@ -1,7 +1,7 @@
 //! The PLY header: the format line, the elements and their properties, and
 //! what each property means to the mesh.
 
-use crate::format::diagnostic::{decode, quote, ParseError};
+use crate::format::diagnostic::{decode, quote, words, ParseError};
 use std::path::Path;
 
 /// Longest header accepted, in bytes (real headers are a few hundred).
@@ -435,24 +435,4 @@ fn find_end_header(bytes: &[u8]) -> Option<(usize, usize)> {
         start = nl + 1;
     }
     None
-}
-
-/// The whitespace-separated words of a line with their 1-based columns.
-fn words(line: &str) -> Vec<(usize, &str)> {
-    let mut out = Vec::new();
-    let mut start: Option<(usize, usize)> = None;
-    for (col, (i, c)) in line.char_indices().enumerate() {
-        match (c.is_whitespace(), start) {
-            (true, Some((s, sc))) => {
-                out.push((sc, &line[s..i]));
-                start = None;
-            }
-            (false, None) => start = Some((i, col + 1)),
-            _ => {}
-        }
-    }
-    if let Some((s, sc)) = start {
-        out.push((sc, &line[s..]));
-    }
-    out
 }

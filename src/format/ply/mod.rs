@@ -149,10 +149,19 @@ fn placed(path: &Path, h: &Header, place: Place, expected: &str, found: String) 
 }
 
 /// One element instance's values as read: scalars by property, lists aside.
+#[derive(Default)]
 struct Values {
     scalars: Vec<f64>,
     /// Corner indices of the face or strip list.
     list: Vec<i64>,
+}
+
+impl Values {
+    /// Room for the `n` scalar properties of an element, zeroed.
+    fn start_element(&mut self, n: usize) {
+        self.scalars.clear();
+        self.scalars.resize(n, 0.0);
+    }
 }
 
 /// Turns one read element instance into mesh data.

@@ -101,35 +101,34 @@ pub fn query_map(pairs: Vec<(String, String)>) -> Result<HashMap<String, String>
     Ok(m)
 }
 
-fn number<T: FromStr + PartialOrd + std::fmt::Display + Copy>(
-    q: &HashMap<String, String>,
-    name: &str,
-    default: T,
-    min: T,
-    max: T,
-) -> Result<T, Bad> {
-    match q.get(name) {
-        None => Ok(default),
-        Some(s) => {
-            let v: T = limits::parse_flag(name, s)?;
-            limits::int_in(name, v, min, max)
-        }
+/// A parameter type and its range check: integers within their bounds,
+/// floats also finite (`limits`' checks).
+trait Ranged: FromStr + Copy {
+    fn in_range(name: &str, v: Self, min: Self, max: Self) -> Result<Self, String>;
+}
+
+impl Ranged for u32 {
+    fn in_range(name: &str, v: u32, min: u32, max: u32) -> Result<u32, String> {
+        limits::int_in(name, v, min, max)
     }
 }
 
-fn float(
+impl Ranged for f32 {
+    fn in_range(name: &str, v: f32, min: f32, max: f32) -> Result<f32, String> {
+        limits::finite_in(name, v, min, max)
+    }
+}
+
+/// Query parameter `name` in `[min, max]`, `default` when absent.
+fn number<T: Ranged>(
     q: &HashMap<String, String>,
     name: &str,
-    default: f32,
-    min: f32,
-    max: f32,
-) -> Result<f32, Bad> {
+    default: T,
+    (min, max): (T, T),
+) -> Result<T, Bad> {
     match q.get(name) {
         None => Ok(default),
-        Some(s) => {
-            let v: f32 = limits::parse_flag(name, s)?;
-            limits::finite_in(name, v, min, max)
-        }
+        Some(s) => Ok(T::in_range(name, limits::parse_flag(name, s)?, min, max)?),
     }
 }
 
@@ -227,8 +226,8 @@ pub fn accel_menu() -> Vec<String> {
 
 /// The view a query asks for.
 pub fn view(q: &HashMap<String, String>, d: &Defaults, scene_camera: &Camera) -> Result<View, Bad> {
-    let w = number(q, "w", d.size.0, 1, MAX_SIDE)?;
-    let h = number(q, "h", d.size.1, 1, MAX_SIDE)?;
+    let w = number(q, "w", d.size.0, (1, MAX_SIDE))?;
+    let h = number(q, "h", d.size.1, (1, MAX_SIDE))?;
     let integrator = match q.get("integrator").map_or("whitted", String::as_str) {
         "whitted" => IntegratorName::Whitted,
         "ao" => IntegratorName::Ao,
@@ -266,9 +265,9 @@ pub fn view(q: &HashMap<String, String>, d: &Defaults, scene_camera: &Camera) ->
         accel,
         shadows: flag(q, "shadows", d.shadows)?,
         shade_back: flag(q, "shade_back", d.shade_back)?,
-        bounces: number(q, "bounces", default_bounces, 0, limits::MAX_BOUNCES)?,
-        weight: float(q, "weight", d.weight, 0.0, f32::MAX)?,
-        spp: number(q, "spp", d.spp, 1, limits::MAX_SAMPLES)?,
+        bounces: number(q, "bounces", default_bounces, (0, limits::MAX_BOUNCES))?,
+        weight: number(q, "weight", d.weight, (0.0, f32::MAX))?,
+        spp: number(q, "spp", d.spp, (1, limits::MAX_SAMPLES))?,
         sampler: named(
             q,
             "sampler",
@@ -324,13 +323,13 @@ fn camera(q: &HashMap<String, String>, scene: &Camera) -> Result<Option<Camera>,
             center,
             direction,
             up,
-            angle_deg: float(q, "fov", angle_deg, 0.1, 179.0)?,
+            angle_deg: number(q, "fov", angle_deg, (0.1, 179.0))?,
         },
         Camera::Orthographic { size, .. } => Camera::Orthographic {
             center,
             direction,
             up,
-            size: float(q, "span", size, 1e-6, MAX_COORD)?,
+            size: number(q, "span", size, (1e-6, MAX_COORD))?,
         },
     }))
 }
@@ -340,8 +339,8 @@ pub fn pixel(q: &HashMap<String, String>, (w, h): (u32, u32)) -> Result<(u32, u3
     let (Some(_), Some(_)) = (q.get("x"), q.get("y")) else {
         return Err("give the pixel as x and y".into());
     };
-    let x = number(q, "x", 0, 0, w - 1)?;
-    let y = number(q, "y", 0, 0, h - 1)?;
+    let x = number(q, "x", 0, (0, w - 1))?;
+    let y = number(q, "y", 0, (0, h - 1))?;
     Ok((x, y))
 }
 
@@ -364,5 +363,5 @@ pub fn session(q: &HashMap<String, String>) -> Result<String, Bad> {
 
 /// The pass the page expects next (0 to start over).
 pub fn pass(q: &HashMap<String, String>) -> Result<u32, Bad> {
-    number(q, "pass", 0, 0, limits::MAX_SAMPLES)
+    number(q, "pass", 0, (0, limits::MAX_SAMPLES))
 }
