@@ -54,33 +54,32 @@ pub enum Output {
 /// The largest zoom of the sample and filter views.
 pub const MAX_ZOOM: u32 = 1000;
 
+/// The file of an output, by reference (`ref`) or mutable reference
+/// (`ref mut`): the one list of which variant keeps its path where.
+macro_rules! output_path {
+    ($o:expr, $($r:tt)+) => {
+        match $o {
+            Output::Colour($($r)+ p)
+            | Output::Normals($($r)+ p)
+            | Output::SamplesHeatMap($($r)+ p)
+            | Output::Cost($($r)+ p)
+            | Output::Stats($($r)+ p)
+            | Output::Depth { path: $($r)+ p, .. }
+            | Output::SamplesView { path: $($r)+ p, .. }
+            | Output::FilterView { path: $($r)+ p, .. } => p,
+        }
+    };
+}
+
 impl Output {
     /// The file.
     pub fn path(&self) -> &Path {
-        match self {
-            Output::Colour(p)
-            | Output::Normals(p)
-            | Output::SamplesHeatMap(p)
-            | Output::Cost(p)
-            | Output::Stats(p) => p,
-            Output::Depth { path, .. }
-            | Output::SamplesView { path, .. }
-            | Output::FilterView { path, .. } => path,
-        }
+        output_path!(self, ref)
     }
 
     /// The file, to rename it.
     pub fn path_mut(&mut self) -> &mut PathBuf {
-        match self {
-            Output::Colour(p)
-            | Output::Normals(p)
-            | Output::SamplesHeatMap(p)
-            | Output::Cost(p)
-            | Output::Stats(p) => p,
-            Output::Depth { path, .. }
-            | Output::SamplesView { path, .. }
-            | Output::FilterView { path, .. } => path,
-        }
+        output_path!(self, ref mut)
     }
 
     /// What the file is, for messages.

@@ -10,9 +10,9 @@
 
 use super::draw::Canvas;
 use crate::integrator::{Integrator, RayKind, RayRecorder, RecordedRay, Trace};
-use crate::math::{Vec2, Vec3};
+use crate::math::{Ray, Vec2, Vec3};
 use crate::render::{pixel_of_screen, screen_point, CameraModel, PixelOffset};
-use crate::sampler::Sampler;
+use crate::sampler::{SampleStream, Sampler};
 use crate::stats::Counters;
 use crate::world::World;
 use std::fmt::Write as _;
@@ -45,25 +45,13 @@ pub fn record<I: Integrator>(
 ) -> RayTree {
     let j = h - 1 - y.min(h - 1);
     let ray = camera.ray(screen_point(x.min(w - 1), j, offset.0, w, h));
-    let mut rec = RayRecorder::default();
     // Every random decision (light point, lobe, hemisphere) at the centre
     // of its stratum, as in a one-ray render at the pixel centre.
     let sampler = Sampler::fixed(Vec2::splat(0.5));
     let mut stream = sampler.stream((0, 0), 0);
     stream.skip();
-    let cx = &mut Trace {
-        world,
-        stream: &mut stream,
-        counters: &mut Counters::default(),
-        observer: &mut rec,
-    };
-    let (color, _) = integrator.li(cx, &ray, camera.tmin());
-    RayTree {
-        pixel: (x, y),
-        size: (w, h),
-        rays: rec.rays,
-        color,
-    }
+    let tmin = camera.tmin();
+    trace_recorded(world, integrator, &ray, tmin, &mut stream, (w, h), (x, y))
 }
 
 /// Traces sample `index` of pixel `(x, y)` (y from the top) of a `w`×`h`
@@ -85,17 +73,32 @@ pub fn record_sample<I: Integrator>(
     let mut stream = sampler.stream((i, j), index);
     let offset = stream.next_2d();
     let ray = camera.sample_ray(screen_point(i, j, offset, w, h), &mut stream);
+    let tmin = camera.tmin();
+    trace_recorded(world, integrator, &ray, tmin, &mut stream, (w, h), (x, y))
+}
+
+/// Traces `ray` with `stream` through `integrator`, recording every ray,
+/// as the tree of pixel `(x, y)` of a `w`×`h` image.
+fn trace_recorded<I: Integrator>(
+    world: &World,
+    integrator: &I,
+    ray: &Ray,
+    tmin: f32,
+    stream: &mut SampleStream,
+    size: (u32, u32),
+    pixel: (u32, u32),
+) -> RayTree {
     let mut rec = RayRecorder::default();
     let cx = &mut Trace {
         world,
-        stream: &mut stream,
+        stream,
         counters: &mut Counters::default(),
         observer: &mut rec,
     };
-    let (color, _) = integrator.li(cx, &ray, camera.tmin());
+    let (color, _) = integrator.li(cx, ray, tmin);
     RayTree {
-        pixel: (x, y),
-        size: (w, h),
+        pixel,
+        size,
         rays: rec.rays,
         color,
     }
