@@ -25,7 +25,7 @@
 //! goes on, since they block no ray (shadow rays pass through them too).
 //!
 //! **Sample dimensions.** Every vertex takes the same [`DIMS_PER_VERTEX`]
-//! dimensions of the pixel's [`SampleStream`] in the same order, used or
+//! dimensions of the pixel's [`SampleStream`](crate::sampler::SampleStream) in the same order, used or
 //! not (light choice, light point, lobe, direction, roulette), so dimension
 //! `k` of a pixel's samples means the same decision in every path and the
 //! sampler's stratification reaches every bounce. The image depends on
