@@ -229,7 +229,7 @@ fn texture_must_refer_to_earlier_materials() {
 }
 
 /// Positions keep every digit the file gives (read as f64): at 10⁵ an f32
-/// would round 0.3 to 0.3046875; directions and radii stay f32.
+/// would read 0.3 as 0.3046875; directions and radii stay f32.
 #[test]
 fn positions_are_read_in_double_precision() {
     let s = scene(&format!(
