@@ -817,3 +817,133 @@ fn area_lights_are_seen_hit_and_weighted_like_emitting_triangles() {
         assert!(rel < 0.02, "{strategy:?}: mean {m} vs MIS {ma}");
     }
 }
+
+/// `--max-depth N` under `--integrator path` is the path's depth limit, the
+/// same as `--bounces N` (N scattering events; Mitsuba's `max_depth` is
+/// N + 1), in `glint render` and the course's `raytracer` (`-max_depth`),
+/// bit for bit; a different depth gives a different image; it keeps its
+/// adaptive meaning under the other integrators; where the two meanings
+/// collide (path and adaptive) and where a depth is given twice, the
+/// command fails with status 2 and names the flags to use.
+#[test]
+fn max_depth_is_the_path_depth_under_the_path_tracer() {
+    use std::process::Command;
+    let dir = scratch("path-max-depth");
+    let scene = own_scene("cornell_box.txt").to_string_lossy().into_owned();
+    let glint = |out: &str, extra: &[&str]| {
+        let mut args = vec!["render", &scene, "-o", out, "--size", "12", "12"];
+        args.extend_from_slice(extra);
+        Command::new(env!("CARGO_BIN_EXE_glint"))
+            .args(&args)
+            .arg("--quiet")
+            .current_dir(&*dir)
+            .output()
+            .unwrap()
+    };
+    let bytes = |f: &str| std::fs::read(dir.join(f)).unwrap();
+    let ok = |o: &std::process::Output| {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    ok(&glint(
+        "md1.exr",
+        &["--integrator", "path", "--spp", "4", "--max-depth", "1"],
+    ));
+    ok(&glint(
+        "b1.exr",
+        &["--integrator", "path", "--spp", "4", "--bounces", "1"],
+    ));
+    ok(&glint(
+        "md2.exr",
+        &["--integrator", "path", "--spp", "4", "--max-depth", "2"],
+    ));
+    assert_eq!(bytes("md1.exr"), bytes("b1.exr"));
+    assert_ne!(bytes("md1.exr"), bytes("md2.exr"));
+    let course = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(["-input", &scene, "-size", "12", "12", "-output", "r1.exr"])
+        .args([
+            "-sobol_samples",
+            "4",
+            "-integrator",
+            "path",
+            "-max_depth",
+            "1",
+        ])
+        .current_dir(&*dir)
+        .output()
+        .unwrap();
+    ok(&course);
+    assert_eq!(bytes("r1.exr"), bytes("b1.exr"));
+    // The adaptive meaning: --max-depth and --adaptive-depth agree, and
+    // the depth changes the adaptive image.
+    for (out, flag, d) in [
+        ("a3.png", "--max-depth", "3"),
+        ("ad3.png", "--adaptive-depth", "3"),
+        ("a0.png", "--max-depth", "0"),
+    ] {
+        ok(&glint(out, &["--adaptive", "0.01", flag, d]));
+    }
+    assert_eq!(bytes("a3.png"), bytes("ad3.png"));
+    assert_ne!(bytes("a3.png"), bytes("a0.png"));
+    // Path and adaptive together use the unambiguous flags...
+    ok(&glint(
+        "pa.exr",
+        &[
+            "--integrator",
+            "path",
+            "--adaptive",
+            "0.1",
+            "--bounces",
+            "1",
+            "--adaptive-depth",
+            "1",
+        ],
+    ));
+    // ... and --max-depth there is an error that names them.
+    for (extra, want) in [
+        (
+            &[
+                "--integrator",
+                "path",
+                "--adaptive",
+                "0.1",
+                "--max-depth",
+                "1",
+            ][..],
+            &["ambiguous", "--bounces", "--adaptive-depth"][..],
+        ),
+        (
+            &["--integrator", "path", "--max-depth", "1", "--bounces", "1"],
+            &["--bounces", "give one"],
+        ),
+        (
+            &["--integrator", "path", "--max-depth", "65"],
+            &["--max-depth", "0 to 64"],
+        ),
+    ] {
+        let o = glint("x.exr", extra);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        for w in want {
+            assert!(err.contains(w), "{extra:?}: {err}");
+        }
+    }
+    let course = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(["-input", &scene, "-size", "12", "12", "-output", "x.exr"])
+        .args(["-integrator", "path", "-adaptive", "0.1", "-max_depth", "1"])
+        .current_dir(&*dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&course.stderr);
+    assert_eq!(course.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("-bounces") && err.contains("-adaptive_depth"),
+        "{err}"
+    );
+    // --help states the convention.
+    let help = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["render", "--help"])
+        .output()
+        .unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("Mitsuba's max_depth is N+1"), "{help}");
+}

@@ -159,7 +159,16 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "T",
         "Whitted's adaptive corner subdivision, threshold T",
     ),
-    ("-max_depth", "D", "deepest subdivision of -adaptive, 0 to 8 (default 2)"),
+    (
+        "-max_depth",
+        "D",
+        "deepest subdivision of -adaptive, 0 to 8 (default 2); with -integrator path (and no -adaptive) the path's depth limit instead, as -bounces D (D scattering events; Mitsuba's max_depth is D+1)",
+    ),
+    (
+        "-adaptive_depth",
+        "D",
+        "deepest subdivision of -adaptive under any integrator (what -max_depth means without -integrator path)",
+    ),
     (
         "-samples_image",
         "FILE",
@@ -344,9 +353,30 @@ fn parse(args: &[String]) -> Result<(Job, bool, bool), String> {
         (Some(kind), _) => kind,
         (None, None) => AccelKind::default(),
     };
+    // -max_depth: the adaptive subdivision's depth, or the path's under
+    // -integrator path (glint::job::depths).
+    let given = |flag: &str| -> Result<Option<u32>, String> {
+        match args.iter().rposition(|a| a == flag) {
+            Some(i) => number(flag, args.get(i + 1).ok_or("a depth")?).map(Some),
+            None => Ok(None),
+        }
+    };
+    let bounces_given = args.iter().any(|a| a == "-bounces");
+    let (adaptive_depth, path_depth) = glint::job::depths(
+        FlagNames::Course,
+        job.integrator,
+        given("-max_depth")?,
+        given("-adaptive_depth")?,
+        job.sampling.adaptive.is_some(),
+        bounces_given.then_some(job.shading.bounces),
+    )?;
+    job.sampling.max_depth = adaptive_depth;
     if let IntegratorKind::Path(p) = &mut job.integrator {
-        // The path tracer's own default depth unless -bounces names one.
-        if !args.iter().any(|a| a == "-bounces") {
+        // The path tracer's own default depth unless -bounces or
+        // -max_depth names one.
+        if let Some(d) = path_depth {
+            job.shading.bounces = d;
+        } else if !bounces_given {
             job.shading.bounces = p.max_bounces;
         }
         p.max_bounces = job.shading.bounces;
@@ -445,7 +475,11 @@ fn sampling_flag(job: &mut Job, flag: &str, value: Value) -> Result<bool, String
             };
         }
         "-adaptive" => job.sampling.adaptive = Some(number(flag, value("a threshold")?)?),
-        "-max_depth" => job.sampling.max_depth = number(flag, value("a depth")?)?,
+        // Read again after the loop (glint::job::depths): their meaning
+        // depends on -integrator and -adaptive.
+        "-max_depth" | "-adaptive_depth" => {
+            number::<u32>(flag, value("a depth")?)?;
+        }
         _ => return Ok(false),
     }
     Ok(true)

@@ -22,7 +22,7 @@ pub mod spec;
 pub use outputs::{Output, MAX_ZOOM};
 pub use preflight::{available_memory, check_frame_memory, load_scene_for, FRAME_BYTES_PER_PIXEL};
 pub use report::{course_stats_text, Report, Stats};
-pub use spec::{uses_sampling, FlagNames, Job, SampleOverrides, Sampling, Shading};
+pub use spec::{depths, uses_sampling, FlagNames, Job, SampleOverrides, Sampling, Shading};
 
 pub use crate::limits::FALLBACK_AVAILABLE;
 

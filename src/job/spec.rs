@@ -202,6 +202,63 @@ impl SampleOverrides {
     }
 }
 
+/// What the depth flags mean together (named as `names` spells them):
+/// `--max-depth D` (`max_depth`), `--adaptive-depth D` (`adaptive_depth`),
+/// whether `--adaptive` is on, and `--bounces N` (`bounces`). Returns the
+/// adaptive subdivision depth, and the path tracer's depth limit when
+/// `--max-depth` gives it (`None`: `--bounces` or the default decides).
+///
+/// `--max-depth` is the adaptive subdivision's depth, except under
+/// `--integrator path` without `--adaptive`, where it is the path's depth
+/// limit (the name issue 37 gives it): N scattering events, as
+/// `--bounces N` (0 shows the emitters alone, 1 adds direct light;
+/// Mitsuba's `max_depth` is N + 1). Under `--integrator path` with
+/// `--adaptive` it could mean either: an error that names the unambiguous
+/// flags, `--bounces` and `--adaptive-depth`. Giving one depth twice is an
+/// error too.
+pub fn depths(
+    names: FlagNames,
+    integrator: IntegratorKind,
+    max_depth: Option<u32>,
+    adaptive_depth: Option<u32>,
+    adaptive: bool,
+    bounces: Option<u32>,
+) -> Result<(u32, Option<u32>), String> {
+    let [max, ad, b, ia, it] = [
+        "max-depth",
+        "adaptive-depth",
+        "bounces",
+        "adaptive",
+        "integrator",
+    ]
+    .map(|f| names.flag(f));
+    let adaptive_depth_or_default = adaptive_depth.unwrap_or(Adaptive::DEFAULT_MAX_DEPTH);
+    let Some(d) = max_depth else {
+        return Ok((adaptive_depth_or_default, None));
+    };
+    if !matches!(integrator, IntegratorKind::Path(_)) {
+        if adaptive_depth.is_some() {
+            return Err(format!(
+                "{max} and {ad} both set the adaptive subdivision depth: give one"
+            ));
+        }
+        return Ok((d, None));
+    }
+    if adaptive {
+        return Err(format!(
+            "{max} {d} is ambiguous with {it} path and {ia}: give the path's depth limit as \
+             {b} N (N scattering events) and the adaptive subdivision depth as {ad} D"
+        ));
+    }
+    if bounces.is_some() {
+        return Err(format!(
+            "{max} {d} and {b} both set the path's depth limit under {it} path: give one"
+        ));
+    }
+    limits::int_in(&max, d, 0, limits::MAX_BOUNCES)?;
+    Ok((adaptive_depth_or_default, Some(d)))
+}
+
 /// How a validation message names a setting: as the flag of the command
 /// line that set it, or plainly for a library caller.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

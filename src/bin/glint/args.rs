@@ -5,9 +5,9 @@
 use clap::Args;
 use glint::accel::AccelKind;
 use glint::integrator::IntegratorKind;
-use glint::job::{SampleOverrides, Sampling, Shading};
+use glint::job::{FlagNames, SampleOverrides, Sampling, Shading};
 use glint::material::TextureSpace;
-use glint::render::{Adaptive, Filter, PixelOffset};
+use glint::render::{Filter, PixelOffset};
 use glint::sampler::SamplerKind;
 use std::path::PathBuf;
 
@@ -42,7 +42,7 @@ impl ImageArgs {
 /// The ray tree's settings.
 #[derive(Args)]
 pub struct ShadingArgs {
-    /// Maximum number of reflection/refraction bounces (0 to 64; default 5). With --integrator path: scattering events per path (default 64; 0 shows emitters only, 1 direct light).
+    /// Maximum number of reflection/refraction bounces (0 to 64; default 5). With --integrator path: scattering events per path (default 64; 0 shows emitters only, 1 direct light; Mitsuba's max_depth is one more); --max-depth says the same there.
     #[arg(long)]
     pub bounces: Option<u32>,
     /// Prune ray-tree branches contributing less than this (finite, >= 0).
@@ -109,9 +109,12 @@ pub struct SamplingArgs {
     /// Whitted's adaptive supersampling: split a pixel square where its corners differ by more than this (0..1).
     #[arg(long, value_name = "THRESHOLD")]
     pub adaptive: Option<f32>,
-    /// Deepest adaptive subdivision (squares of 2^-D pixels), 0 to 8.
-    #[arg(long, value_name = "D", default_value_t = Adaptive::DEFAULT_MAX_DEPTH)]
-    pub max_depth: u32,
+    /// Deepest adaptive subdivision (squares of 2^-D pixels), 0 to 8 (default 2). With --integrator path: the path's depth limit instead, as --bounces N (N scattering events, 0 to 64: 0 shows emitters only, 1 direct light; Mitsuba's max_depth is N+1); with --integrator path and --adaptive it is ambiguous (an error): use --bounces and --adaptive-depth.
+    #[arg(long, value_name = "D")]
+    pub max_depth: Option<u32>,
+    /// Deepest adaptive subdivision (squares of 2^-D pixels), 0 to 8 (default 2): --max-depth's adaptive meaning under any integrator.
+    #[arg(long, value_name = "D")]
+    pub adaptive_depth: Option<u32>,
     /// Shadow rays per area light per shaded point, 1 to 4096 (overrides the scene's Samples).
     #[arg(long, value_name = "N")]
     pub shadow_samples: Option<u32>,
@@ -131,16 +134,30 @@ pub struct SamplingArgs {
 
 impl SamplingArgs {
     /// The settings, with one ray through each pixel's centre when there
-    /// is one sample per pixel (ranges are checked by the job's `validate`).
-    pub fn sampling(&self) -> Sampling {
-        Sampling {
+    /// is one sample per pixel (ranges are checked by the job's `validate`),
+    /// and the path depth `--max-depth` gives under `integrator` (see
+    /// [`glint::job::depths`]).
+    pub fn sampling(
+        &self,
+        shading: &ShadingArgs,
+        integrator: IntegratorKind,
+    ) -> Result<(Sampling, Option<u32>), String> {
+        let (max_depth, bounces) = glint::job::depths(
+            FlagNames::Glint,
+            integrator,
+            self.max_depth,
+            self.adaptive_depth,
+            self.adaptive.is_some(),
+            shading.bounces,
+        )?;
+        let sampling = Sampling {
             pixel_offset: PixelOffset::CENTER,
             spp: self.spp,
             sampler: self.sampler,
             seed: self.seed,
             filter: self.filter,
             adaptive: self.adaptive,
-            max_depth: self.max_depth,
+            max_depth,
             effects: SampleOverrides {
                 shadow: self.shadow_samples,
                 glossy: self.glossy_samples,
@@ -148,6 +165,7 @@ impl SamplingArgs {
                 lens: self.lens_samples,
                 ao: self.ao_samples,
             },
-        }
+        };
+        Ok((sampling, bounces))
     }
 }

@@ -116,14 +116,21 @@ fn job(a: &RenderArgs) -> Result<Job, JobError> {
     let (w, h) = a.image.size();
     let mut job = Job::new(a.scene.scene.clone(), w, h);
     job.integrator = a.integrator;
+    let (sampling, path_depth) = a
+        .sampling
+        .sampling(&a.shading, a.integrator)
+        .map_err(app::usage)?;
+    job.sampling = sampling;
     job.shading = a.shading.shading(a.integrator);
+    if let Some(d) = path_depth {
+        job.shading.bounces = d;
+    }
     if let IntegratorKind::Path(p) = &mut job.integrator {
         p.max_bounces = job.shading.bounces;
     }
     if a.srgb {
         job.encoding = glint::output::Encoding::Srgb;
     }
-    job.sampling = a.sampling.sampling();
     job.build = BuildOptions {
         accel: a.scene.accel,
         flatten: !a.no_flatten,
