@@ -16,7 +16,7 @@
 #         to glint's time first (RMSE ~ 1/sqrt(time) at a fixed sampler: x sqrt(Mitsuba s / glint s)):
 #         the ratio at exactly equal time, without and with the reference's noise taken out.
 #   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
-#         `pip install mitsuba` on first use)
+#         `pip install mitsuba` (and numpy, which `path` reads the images with) on first use)
 #   REPS  repetitions (default 3): medians are reported
 #   SIZE  image size (default 800)
 # Samples per pixel: 1, and 16 when `glint render --help` lists --spp (or SPPS="1 16"). Threads: 1 and 2 for glint;
@@ -30,7 +30,7 @@ if [ "${1:-}" = path ]; then
   median() { python3 -c "import statistics, sys; print(statistics.median(map(float, sys.argv[1:])))" "$@"; }
   if ! [ -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
-    "$venv/bin/pip" install --quiet mitsuba
+    "$venv/bin/pip" install --quiet mitsuba numpy
   fi
   cargo build --release --quiet --bin glint
   tmp=$(mktemp -d)

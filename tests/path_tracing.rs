@@ -947,3 +947,48 @@ fn max_depth_is_the_path_depth_under_the_path_tracer() {
     let help = String::from_utf8_lossy(&help.stdout);
     assert!(help.contains("Mitsuba's max_depth is N+1"), "{help}");
 }
+
+/// Russian roulette's scale: a path survives with probability
+/// `min(0.95, rr_scale · max β)`. On the caustic Cornell box, whose noise is
+/// light that reaches the walls through the mirror and glass spheres and
+/// that only BSDF sampling finds, the default scale 2 against the usual 1
+/// lowers the variance at equal samples far more than it adds rays: the
+/// product variance × rays traced (the inverse of the efficiency, if time
+/// goes as rays) is lower by at least 10%, and the image means agree
+/// (roulette is unbiased at any scale). Variance: half the mean squared
+/// difference of two renders of other seeds (128×128, 64 Sobol samples).
+#[test]
+fn roulette_scale_two_is_more_efficient_on_the_caustic_box() {
+    let scene = own_scene("cornell_caustics.txt");
+    let measure = |rr_scale: f32| {
+        let settings = PathSettings {
+            rr_scale,
+            ..PathSettings::default()
+        };
+        let mut rays = 0;
+        let mut images = Vec::new();
+        for seed in [1, 2] {
+            let mut job = Job::new(scene.clone(), 128, 128);
+            job.sampling.spp = 64;
+            job.sampling.seed = seed;
+            job.shading.bounces = settings.max_bounces;
+            job.integrator = IntegratorKind::Path(settings);
+            job.threads = Some(2);
+            let report = job.run().unwrap();
+            rays += report.counters.rays_total();
+            images.push(report.frame.color);
+        }
+        let var = rmse(&images[0], &images[1]).powi(2) / 2.0;
+        (var, rays as f64 / 2.0, mean(&images[0]) + mean(&images[1]))
+    };
+    let (v1, r1, m1) = measure(1.0);
+    let (v2, r2, m2) = measure(2.0);
+    eprintln!(
+        "roulette scale 1: variance {v1:.3e}, rays {r1:.4e}; scale 2: variance {v2:.3e}, \
+         rays {r2:.4e}; variance x rays {:.3} of scale 1's",
+        v2 * r2 / (v1 * r1)
+    );
+    assert!(v2 * r2 < 0.9 * v1 * r1, "{v2} x {r2} vs {v1} x {r1}");
+    let d = (m2 - m1).abs() / m1;
+    assert!(d.max_element() < 0.01, "means {m1} vs {m2}");
+}

@@ -35,9 +35,12 @@
 //! **Depth.** `max_bounces` counts scattering events: 0 shows the emitters
 //! seen directly, 1 adds direct lighting, each further one a bounce of
 //! indirect light (Mitsuba's `max_depth` is one more). Russian roulette
-//! from `rr_depth` on ends a path with probability `1 − min(1, max β)`
-//! (β: the path's throughput), at most 0.95, and divides the survivors by
-//! the survival probability: unbiased.
+//! after `rr_depth` scattering events lets a path survive with probability
+//! `min(0.95, rr_scale · max β)` (β: the path's throughput) and divides
+//! the survivors by it: unbiased. The scale 2 (not the usual 1) keeps
+//! paths whose throughput has fallen to a half: on the caustic Cornell box
+//! it lowers the variance at equal samples by a third for 10% more rays
+//! (docs/path-tracing.md).
 
 use super::{Branch, Integrator, RayKind, RayObserver, Trace};
 use crate::bsdf::Bsdf;
@@ -91,6 +94,9 @@ pub struct PathSettings {
     pub max_bounces: u32,
     /// Bounces before Russian roulette may end a path.
     pub rr_depth: u32,
+    /// Russian roulette's survival probability over the throughput's
+    /// largest channel (at most 0.95; see the module documentation).
+    pub rr_scale: f32,
     /// Which strategies are used.
     pub strategy: Strategy,
     /// How light sampling chooses a light.
@@ -100,12 +106,13 @@ pub struct PathSettings {
 }
 
 impl Default for PathSettings {
-    /// 64 bounces, roulette from the fourth, MIS, lights chosen by power,
-    /// world-space textures.
+    /// 64 bounces, roulette from the fourth with survival `min(0.95,
+    /// 2·max β)`, MIS, lights chosen by power, world-space textures.
     fn default() -> Self {
         Self {
             max_bounces: 64,
             rr_depth: 3,
+            rr_scale: 2.0,
             strategy: Strategy::Mis,
             light_choice: LightChoice::Power,
             texture_space: TextureSpace::World,
@@ -672,7 +679,7 @@ impl Integrator for PathTracer {
             beta *= weight;
             depth += 1;
             if depth > s.rr_depth {
-                let survive = beta.max_element().min(0.95);
+                let survive = (beta.max_element() * s.rr_scale).min(0.95);
                 if cx.stream.get_1d(dim + 4) >= survive {
                     break;
                 }
