@@ -644,11 +644,21 @@ impl Nearest {
     /// [`closer`](Self::closer) can break the tie. Hits are at `t > tmin ≥
     /// −∞` and finite, and the next float above a finite `t` is the bit
     /// pattern one up for `t > 0` (`+inf` above the largest finite value);
-    /// for `t ≤ 0` (a negative `tmin`) `next_up` is exact too.
+    /// for `t ≤ 0` (a negative `tmin`) one down on the magnitude, and the
+    /// smallest positive value above `−0`: `f32::next_up` for a finite
+    /// value, without its branches for NaN and infinities (it runs once
+    /// per block tested).
     #[inline(always)]
     pub(crate) fn test_tmax(&self) -> f32 {
         if self.best.is_some() {
-            self.tmax.next_up()
+            let b = self.tmax.to_bits();
+            f32::from_bits(if b as i32 >= 0 {
+                b + 1
+            } else if b == 1 << 31 {
+                1
+            } else {
+                b - 1
+            })
         } else {
             self.tmax
         }
