@@ -95,10 +95,16 @@ impl Whitted {
         tmin: f32,
         b: Branch,
     ) -> (Vec3, Option<Hit>) {
-        match cx.closest(ray, tmin, b) {
-            None => (cx.world.background().color, None),
-            Some(h) => (self.shade(cx, ray, &h, b), Some(h)),
-        }
+        // The hit shaded where the world wrote it: moved out of the
+        // `Option` first, it was copied with 16-byte loads of the world's
+        // 4-byte stores, which a CPU cannot forward (a stall at every hit;
+        // perf, scene6_07 at 16 spp: a third of this function's own time).
+        let hit = cx.closest(ray, tmin, b);
+        let color = match &hit {
+            None => cx.world.background().color,
+            Some(h) => self.shade(cx, ray, h, b),
+        };
+        (color, hit)
     }
 
     fn shade<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, hit: &Hit, b: Branch) -> Vec3 {

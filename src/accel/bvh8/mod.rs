@@ -45,7 +45,8 @@ mod traverse;
 pub use packet::{PacketRay, PACKET};
 pub use traverse::{Fallback, TrianglesOnly};
 
-use dispatch::{AnyHit, AnyHits, ClosestHit, ClosestHits};
+use dispatch::{AnyHit, AnyHits, ClosestHit, ClosestHits, FromClosest};
+use std::marker::PhantomData;
 use traverse::Tree;
 
 use super::{Aggregate, PrimHit, Query};
@@ -209,13 +210,25 @@ impl Bvh8 {
         tmax: f32,
         stats: &mut S,
     ) -> Option<traverse::Closest> {
+        self.closest_query(fallback, &Query::new(&[], ray, tmin, tmax), stats)
+    }
+
+    /// [`closest_hit`](Self::closest_hit) of `query`'s ray and range (its
+    /// `prims` unused: `fallback` tests the other items), as an `H`.
+    #[inline]
+    fn closest_query<S: TraversalStats, F: Fallback + ?Sized, H: FromClosest>(
+        &self,
+        fallback: &F,
+        query: &Query,
+        stats: &mut S,
+    ) -> Option<H> {
         let tree = self.tree(fallback);
+        let hit = PhantomData;
         dispatch::run(ClosestHit {
             tree,
-            ray,
-            tmin,
-            tmax,
+            query,
             stats,
+            hit,
         })
     }
 
@@ -244,11 +257,23 @@ impl Bvh8 {
         skip: u32,
         stats: &mut S,
     ) -> bool {
-        let (tree, range) = (self.tree(fallback), (tmin, tmax));
+        self.any_query(fallback, &Query::new(&[], ray, tmin, tmax), skip, stats)
+    }
+
+    /// [`any_except`](Self::any_except) of `query`'s ray and range (see
+    /// [`closest_query`](Self::closest_query)).
+    #[inline]
+    fn any_query<S: TraversalStats, F: Fallback + ?Sized>(
+        &self,
+        fallback: &F,
+        query: &Query,
+        skip: u32,
+        stats: &mut S,
+    ) -> bool {
+        let tree = self.tree(fallback);
         dispatch::run(AnyHit {
             tree,
-            ray,
-            range,
+            query,
             skip,
             stats,
         })
@@ -324,7 +349,7 @@ impl Bvh8 {
 
 impl Aggregate for Bvh8 {
     fn intersect(&self, q: Query, c: &mut Counters) -> Option<PrimHit> {
-        self.intersect_barycentric(q, c).map(|(h, _)| h)
+        self.closest_query(q.prims, &q, c)
     }
 
     fn intersect_barycentric(
@@ -332,8 +357,7 @@ impl Aggregate for Bvh8 {
         q: Query,
         c: &mut Counters,
     ) -> Option<(PrimHit, Option<[f32; 3]>)> {
-        self.closest_hit(q.prims, q.ray, q.tmin, q.tmax, c)
-            .map(|h| (PrimHit { t: h.t, prim: h.id }, h.bary))
+        self.closest_query(q.prims, &q, c)
     }
 
     fn occluded(&self, q: Query, c: &mut Counters) -> bool {
@@ -341,7 +365,7 @@ impl Aggregate for Bvh8 {
     }
 
     fn occluded_except(&self, q: Query, except: u32, c: &mut Counters) -> bool {
-        self.any_except(q.prims, q.ray, q.tmin, q.tmax, except, c)
+        self.any_query(q.prims, &q, except, c)
     }
 
     fn memory_bytes(&self) -> usize {

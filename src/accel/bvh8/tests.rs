@@ -359,19 +359,18 @@ fn both_stack_sizes_agree() {
                 ..deep.tree(&prims[..])
             };
             let (tmin, tmax) = (0.0, f32::INFINITY);
-            let c = dispatch::run(ClosestHit {
+            let query = &Query::new(&prims, &r, tmin, tmax);
+            let c = dispatch::run(ClosestHit::<_, _, traverse::Closest> {
                 tree,
-                ray: &r,
-                tmin,
-                tmax,
+                query,
                 stats,
+                hit: PhantomData,
             });
             assert_eq!(c, deep.closest_hit(&prims[..], &r, tmin, tmax, stats));
-            let (range, skip) = ((tmin, tmax), NO_ITEM);
+            let skip = NO_ITEM;
             let a = dispatch::run(AnyHit {
                 tree,
-                ray: &r,
-                range,
+                query,
                 skip,
                 stats,
             });

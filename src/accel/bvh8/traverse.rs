@@ -162,11 +162,9 @@ pub(crate) struct RayData {
     /// `1 / dir` per axis, splatted, with tiny components clamped (see
     /// [`safe_inverse`]).
     pub(crate) inv: [Lanes; 3],
-    /// Index into `Node::planes` of the near and far plane per axis (the
-    /// ray's octant).
-    near: [usize; 3],
-    far: [usize; 3],
-    /// Bit `a` set where the ray runs towards −axis `a` (see [`octant`](Self::octant)).
+    /// Bit `a` set where the ray runs towards −axis `a` (see
+    /// [`octant`](Self::octant)); it picks the near and far planes (see
+    /// [`planes`](Self::planes)).
     octant: usize,
     /// Whether every `origin · inv` is finite: then no slab distance is
     /// NaN (see [`reduce_as_ints`](Self::reduce_as_ints)).
@@ -241,8 +239,6 @@ impl RayData {
                 Lanes::splat(inv.y),
                 Lanes::splat(inv.z),
             ],
-            near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
-            far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
             octant: neg(0) | neg(1) << 1 | neg(2) << 2,
             finite: oi.is_finite(),
         }
@@ -273,19 +269,24 @@ impl RayData {
     /// Indices into `Node::planes` of the near and far plane per axis: from
     /// `O` when it is an octant (constant offsets: the node step then loads
     /// each plane straight from the node, with no index to reload), else
-    /// from the ray.
+    /// from the ray's octant bits. Derived from the bits, not stored: an
+    /// index read back from memory has to be bounds-checked, and the
+    /// closest-hit walk reloaded and re-checked all six after every leaf
+    /// (callgrind, scene6_07: some 20 instructions a leaf); these are
+    /// below 6 by construction.
     #[inline(always)]
     fn planes<const O: usize>(&self) -> ([usize; 3], [usize; 3]) {
-        if O < ANY_OCTANT {
+        let o = if O < ANY_OCTANT {
             debug_assert_eq!(O, self.octant);
-            let s = |a: usize| (O >> a) & 1;
-            (
-                [3 * s(0), 1 + 3 * s(1), 2 + 3 * s(2)],
-                [3 - 3 * s(0), 4 - 3 * s(1), 5 - 3 * s(2)],
-            )
+            O
         } else {
-            (self.near, self.far)
-        }
+            self.octant
+        };
+        let s = |a: usize| (o >> a) & 1;
+        (
+            [3 * s(0), 1 + 3 * s(1), 2 + 3 * s(2)],
+            [3 - 3 * s(0), 4 - 3 * s(1), 5 - 3 * s(2)],
+        )
     }
 
     /// The slab test against a node's eight boxes: a bit mask of the boxes
@@ -643,11 +644,21 @@ impl Nearest {
     /// [`closer`](Self::closer) can break the tie. Hits are at `t > tmin ≥
     /// −∞` and finite, and the next float above a finite `t` is the bit
     /// pattern one up for `t > 0` (`+inf` above the largest finite value);
-    /// for `t ≤ 0` (a negative `tmin`) `next_up` is exact too.
+    /// for `t ≤ 0` (a negative `tmin`) one down on the magnitude, and the
+    /// smallest positive value above `−0`: `f32::next_up` for a finite
+    /// value, without its branches for NaN and infinities (it runs once
+    /// per block tested).
     #[inline(always)]
     pub(crate) fn test_tmax(&self) -> f32 {
         if self.best.is_some() {
-            self.tmax.next_up()
+            let b = self.tmax.to_bits();
+            f32::from_bits(if b as i32 >= 0 {
+                b + 1
+            } else if b == 1 << 31 {
+                1
+            } else {
+                b - 1
+            })
         } else {
             self.tmax
         }

@@ -249,3 +249,42 @@ fn integer_reduction_keeps_the_float_tests_boxes() {
     let far = RayData::new(&Ray::new(Vec3::new(1e21, 0.0, 0.0), Vec3::Y));
     assert!(!far.reduce_as_ints(0.0), "1e21 · 1e18 overflows");
 }
+
+/// `Nearest::test_tmax` (its own bit arithmetic) is `f32::next_up` of the
+/// best hit's `t` for finite values of every kind, and `tmax` itself
+/// before any hit.
+#[test]
+fn test_tmax_is_next_up_of_the_best_hit() {
+    let mut r = crate::testutil::Rng::new(42);
+    let mut ts = vec![
+        0.0,
+        -0.0,
+        f32::from_bits(1),
+        -f32::from_bits(1),
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+        1.0,
+        -1.0,
+        f32::MAX,
+        f32::MIN,
+    ];
+    ts.extend(
+        (0..1000)
+            .map(|_| f32::from_bits(r.u64() as u32))
+            .filter(|t| t.is_finite()),
+    );
+    for t in ts {
+        let best = Some(Closest {
+            t,
+            id: 3,
+            bary: None,
+        });
+        let n = Nearest { tmax: t, best };
+        assert_eq!(n.test_tmax().to_bits(), t.next_up().to_bits(), "{t:e}");
+    }
+    let n = Nearest {
+        tmax: 5.0,
+        best: None,
+    };
+    assert_eq!(n.test_tmax(), 5.0);
+}
