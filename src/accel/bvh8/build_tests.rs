@@ -267,7 +267,7 @@ fn a_chain_started_at_any_level_ends_where_it_was_measured() {
     }
 }
 
-/// The parallel path (children of 16k items or more built on other
+/// The parallel path (children of 4k items or more built on other
 /// threads) plans for the same levels as the serial one: started at
 /// level 12, where the median takes over within a few levels, it
 /// builds the one-thread build's nodes, in the same order.

@@ -167,7 +167,7 @@ fn build_quality_stays_where_it_was_measured() {
     }
 }
 
-/// The parallel build (a range of 16k items or more has its children
+/// The parallel build (a range of 4k items or more has its children
 /// built on other threads, their nodes appended and renumbered) makes
 /// the one-thread build's tree, node for node and block for block.
 #[test]
