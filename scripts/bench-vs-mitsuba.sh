@@ -1,6 +1,11 @@
 #!/usr/bin/env bash
-# Whole render of scene6_07 (40k-triangle bunny on a plane, two directional lights, shadows):
-# glint against Mitsuba 3's scalar_rgb direct integrator, in one run, as ratios.
+# Whole renders, glint's Whitted tree against Mitsuba 3's scalar_rgb direct integrator, in one run,
+# as ratios: scene6_07 (40k-triangle bunny on a plane, two directional lights, shadows), and two of
+# scenes/ in the subset both read the same way (scripts/mitsuba_twin.py --whitted):
+# sphere_lights_knot (area lights: two sphere lights, 4 shadow rays each per hit, the 16k-triangle
+# knot; Mitsuba sends 8 emitter samples per hit, each to a light picked at random) and
+# dof_spheres_lit (depth of field: a thin lens, one sphere light, one shadow ray per hit), at their
+# headers' sizes, with the ratio of the two images' means beside the times.
 # usage: scripts/bench-vs-mitsuba.sh [VENV] [REPS] [SIZE]
 #        scripts/bench-vs-mitsuba.sh path [VENV] [SPP] [REPS]
 #   path: the path tracers at equal wall time on 2 threads, on the scenes with Mitsuba references
@@ -18,9 +23,10 @@
 #   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
 #         `pip install mitsuba` (and numpy, which `path` reads the images with) on first use)
 #   REPS  repetitions (default 3): medians are reported
-#   SIZE  image size (default 800)
+#   SIZE  image size of scene6_07 (default 800)
 # Samples per pixel: 1, and 16 when `glint render --help` lists --spp (or SPPS="1 16"). Threads: 1 and 2 for glint;
-# Mitsuba is timed with its default (all cores) pool, which is what its README figure is.
+# Mitsuba is timed with its default (all cores) pool on scene6_07, which is what its README figure is,
+# and with 2 threads (both cores here) on the two scenes of scenes/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" = path ]; then
@@ -95,10 +101,22 @@ if [ -z "$spps" ]; then
   help=$(./target/release/glint render --help)
   if grep -q -- "--spp" <<<"$help"; then spps="1 16"; else spps="1"; fi
 fi
-scene="$shared/scenes/6837/scene6_07_bunny_mesh_40k.txt"
+median() { python3 -c "import statistics, sys; print(statistics.median(map(float, sys.argv[1:])))" "$@"; }
+glint_s() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['render_ms']/1e3)" "$1"; }
 tmp=$(mktemp -d)
-echo "| spp | Mitsuba s | glint s, 2 threads | glint/Mitsuba | glint s, 1 thread | 2-thread speed-up |"
-echo "|---|---|---|---|---|---|"
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "| scene | size | spp | Mitsuba s | glint s, 2 threads | glint/Mitsuba | glint s, 1 thread | 2-thread speed-up | image mean glint/Mitsuba |"
+echo "|---|---|---|---|---|---|---|---|---|"
+row() {  # scene size spp, then the three lists of times, then the mean ratio
+  python3 - "$@" <<'PY'
+import statistics, sys
+scene, size, spp = sys.argv[1:4]
+m, g2, g1 = (statistics.median(map(float, a.split())) for a in sys.argv[4:7])
+print(f"| {scene} | {size} | {spp} | {m:.3f} | {g2:.3f} | {g2 / m:.2f} | {g1:.3f} | {g1 / g2:.2f}x | {sys.argv[7]} |")
+PY
+}
+# scene6_07: Mitsuba's side is the course data's anchors/mitsuba_scene6_07.py (its own thread pool, all cores).
+scene="$shared/scenes/6837/scene6_07_bunny_mesh_40k.txt"
 for spp in $spps; do
   m=(); g2=(); g1=()
   extra=()
@@ -109,15 +127,42 @@ for spp in $spps; do
       # glint's own timer: the render alone (scene loading and BVH build excluded, as for Mitsuba).
       ./target/release/glint render "$scene" -o "$tmp/glint.png" --size "$size" "$size" --shadows \
         --threads "$t" --quiet --stats-json "$tmp/stats.json" "${extra[@]}" >/dev/null
-      s=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['render_ms']/1e3)" "$tmp/stats.json")
+      s=$(glint_s "$tmp/stats.json")
       if [ "$t" = 2 ]; then g2+=("$s"); else g1+=("$s"); fi
     done
   done
-  python3 - "$spp" "${m[*]}" "${g2[*]}" "${g1[*]}" <<'PY'
-import statistics, sys
-spp = sys.argv[1]
-m, g2, g1 = (statistics.median(map(float, a.split())) for a in sys.argv[2:5])
-print(f"| {spp} | {m:.3f} | {g2:.3f} | {g2 / m:.2f} | {g1:.3f} | {g1 / g2:.2f}x |")
-PY
+  row scene6_07 "${size}x$size" "$spp" "${m[*]}" "${g2[*]}" "${g1[*]}" "-"
 done
+# Area lights and depth of field: scenes/ in the subset that glint's Whitted tree and Mitsuba's
+# `direct` integrator read the same way (scripts/mitsuba_twin.py --whitted: emitter sampling only,
+# as many shadow rays per camera sample as glint sends, lights pi times as bright as the Whitted
+# tree's diffuse term has no 1/pi), each at its header's size; Mitsuba on 2 threads. The last
+# column compares the two images' means (the same work gives the same picture up to noise).
+for spec in sphere_lights_knot:512:384 dof_spheres_lit:512:512; do
+  IFS=: read -r name w h <<<"$spec"
+  for spp in $spps; do
+    m=(); g2=(); g1=()
+    for _ in $(seq 1 "$reps"); do
+      m+=("$("$venv/bin/python" scripts/mitsuba_twin.py "scenes/$name.txt" "$tmp/m.exr" --whitted \
+        --size "$w" "$h" --spp "$spp" --threads 2 | sed -E 's/.*: ([0-9.]+) s/\1/')")
+      for t in 2 1; do
+        ./target/release/glint render "scenes/$name.txt" -o "$tmp/g.exr" --size "$w" "$h" --shadows \
+          --spp "$spp" --threads "$t" --quiet --stats-json "$tmp/stats.json" >/dev/null
+        s=$(glint_s "$tmp/stats.json")
+        if [ "$t" = 2 ]; then g2+=("$s"); else g1+=("$s"); fi
+      done
+    done
+    mean=$("$venv/bin/python" - "$tmp/g.exr" "$tmp/m.exr" <<'PY'
+import sys
+import numpy as np
+import mitsuba as mi
+mi.set_variant("scalar_rgb")
+g, m = (np.array(mi.Bitmap(p)).astype(np.float64)[..., :3].mean() for p in sys.argv[1:3])
+print(f"{g / m:.4f}")
+PY
+)
+    row "$name" "${w}x$h" "$spp" "${m[*]}" "${g2[*]}" "${g1[*]}" "$mean"
+  done
+done
+echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
 rm -rf "$tmp"

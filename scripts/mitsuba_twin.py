@@ -4,7 +4,7 @@
 
 usage: python3 scripts/mitsuba_twin.py SCENE OUT.exr [--size W [H]] [--spp N] [--seed S]
                                        [--max-depth D] [--threads T] [--variant V]
-                                       [--albedo-scale F] [--move-emitters DX DY DZ]
+                                       [--albedo-scale F] [--move-emitters DX DY DZ] [--whitted]
 
 Needs the PyPI package mitsuba (`pip install mitsuba`; measured with 3.9.1, variant scalar_rgb).
 Writes a linear RGB float32 OpenEXR image and prints the render time (scene loading excluded).
@@ -27,6 +27,16 @@ The subset, and how each part is read (docs/scene-format.md, "Emission and units
   attenuation 0 0 1 (intensity = color), DirectionalLight (irradiance = color).
 Anything else (planes, orthographic cameras, shutters, keyframes, flat area lights, which glint
 makes two-sided) is refused with a message naming it.
+
+--whitted: the twin of glint's Whitted tree (`glint render --shadows`, the default integrator)
+instead, on scenes lit by sphere AreaLights only, with diffuse materials, a black background and no
+ambient light (anything else is refused): Mitsuba's `direct` integrator with emitter sampling only
+(`bsdf_samples` 0), `emitter_samples` = the scene's `Samples shadow` x the number of lights (glint
+sends `shadow` rays to each light; Mitsuba sends as many rays in all, each to a light picked at
+random), emitters hidden from camera rays (the Whitted tree's area lights are not seen; keep them out
+of view, where Mitsuba's still block rays), every light's radiance times pi (the Whitted diffuse
+term has no 1/pi), `Samples lens` x --spp camera samples per pixel (glint's `spp x lens`). A
+`Samples` block with other fields is refused.
 
 --albedo-scale and --move-emitters make deliberately wrong twins (every diffuse albedo scaled;
 every emitter moved), which the comparison tests must tell apart from the right one.
@@ -203,18 +213,28 @@ def read_obj(path):
 
 
 class Twin:
-    def __init__(self, path, albedo_scale=1.0, move=(0.0, 0.0, 0.0)):
+    def __init__(self, path, albedo_scale=1.0, move=(0.0, 0.0, 0.0), whitted=False):
         self.dir = os.path.dirname(os.path.abspath(path))
         self.albedo_scale = albedo_scale
         self.move = move
+        self.whitted = whitted
         with open(path) as f:
             top = fields(tree(tokens(f.read())))
+        blocks = ("PerspectiveCamera", "Background", "Materials", "Group", "Lights")
         for name in top:
-            if name not in ("PerspectiveCamera", "Background", "Materials", "Group", "Lights"):
+            if name not in blocks + (("Samples",) if whitted else ()):
                 raise Unsupported(f"block {name}")
         self.camera = fields(top["PerspectiveCamera"][0])
         bg = fields(top["Background"][0]) if "Background" in top else {}
         self.background = bg.get("color", [[0.5, 0.5, 0.5]])[0]
+        samples = fields(top["Samples"][0]) if "Samples" in top else {}
+        for k in samples:
+            if k not in ("shadow", "lens"):
+                raise Unsupported(f"Samples {k}")
+        self.shadow_samples = int(samples.get("shadow", [[1]])[0][0])
+        self.lens_samples = int(samples.get("lens", [[1]])[0][0])
+        if whitted and (any(self.background) or any(bg.get("ambientLight", [[0, 0, 0]])[0])):
+            raise Unsupported("a background colour or ambient light (--whitted: black, none)")
         self.materials = []
         if "Materials" in top:
             for c in top["Materials"][0]:
@@ -239,6 +259,8 @@ class Twin:
         transparent = get("transparentColor", [0.0, 0.0, 0.0])
         ior = get("indexOfRefraction", [1.0])[0]
         emission = get("emittedColor", [0.0, 0.0, 0.0])
+        if self.whitted and (any(reflective) or any(transparent) or any(emission)):
+            raise Unsupported("a mirror, glass or emitting material (--whitted: diffuse only)")
         if any(specular) or get("glossiness", [0.0])[0] > 0:
             raise Unsupported("specularColor or glossiness (a Phong lobe)")
         kinds = [k for k, v in (("diffuse", diffuse), ("mirror", reflective), ("glass", transparent)) if any(v)]
@@ -320,6 +342,8 @@ class Twin:
                      "component_format": "float32", "rfilter": {"type": "box"}},
             "sampler": {"type": "independent", "sample_count": spp},
         }
+        # The Whitted tree's diffuse term has no 1/pi: its lights count pi times as bright.
+        boost = math.pi if self.whitted else 1.0
         if "aperture" in cam and cam["aperture"][0][0] > 0:
             sensor["type"] = "thinlens"
             sensor["aperture_radius"] = cam["aperture"][0][0]
@@ -327,6 +351,12 @@ class Twin:
             sensor["focus_distance"] = cam["focusDistance"][0][0]
         scene = {"type": "scene", "sensor": sensor,
                  "integrator": {"type": "path", "max_depth": max_depth}}
+        if self.whitted:
+            if not self.lights or any(k != "AreaLight" or "sphere" not in fields(sub)
+                                      for k, sub in self.lights):
+                raise Unsupported("lights other than sphere AreaLights (--whitted)")
+            scene["integrator"] = {"type": "direct", "bsdf_samples": 0, "hide_emitters": True,
+                                   "emitter_samples": self.shadow_samples * len(self.lights)}
         if any(self.background):
             scene["environment"] = {"type": "constant", "radiance": rgb(self.background)}
         default = {"bsdf": {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb(
@@ -361,7 +391,7 @@ class Twin:
                 s = fields(f["sphere"][0])
                 c, r = s["center"][0], s["radius"][0][0]
                 color, power = f["color"][0], f["power"][0][0]
-                radiance = [x * power / (math.pi * 4 * math.pi * r * r) for x in color]
+                radiance = [boost * x * power / (math.pi * 4 * math.pi * r * r) for x in color]
                 scene[f"light{n}"] = {"type": "sphere", "center": self.moved(c), "radius": r,
                                       "bsdf": {"type": "diffuse", "reflectance": rgb([0, 0, 0])},
                                       "emitter": {"type": "area", "radiance": rgb(radiance)}}
@@ -395,11 +425,13 @@ def main():
     ap.add_argument("--variant", default="scalar_rgb")
     ap.add_argument("--albedo-scale", type=float, default=1.0)
     ap.add_argument("--move-emitters", type=float, nargs=3, default=[0.0, 0.0, 0.0])
+    ap.add_argument("--whitted", action="store_true",
+                    help="the twin of glint's Whitted tree (direct lighting from sphere lights)")
     a = ap.parse_args()
     width = a.size[0]
     height = a.size[1] if len(a.size) > 1 else width
     try:
-        twin = Twin(a.scene, a.albedo_scale, a.move_emitters)
+        twin = Twin(a.scene, a.albedo_scale, a.move_emitters, a.whitted)
     except Unsupported as e:
         raise SystemExit(f"{a.scene}: outside the Mitsuba twin's subset: {e}")
     import drjit as dr
@@ -407,19 +439,20 @@ def main():
     mi.set_variant(a.variant)
     pool = dr.thread_count()
     dr.set_thread_count(a.threads)
+    spp = a.spp * twin.lens_samples if a.whitted else a.spp
     with tempfile.TemporaryDirectory() as tmp:
         try:
-            d = twin.scene_dict(width, height, a.spp, a.max_depth, tmp)
+            d = twin.scene_dict(width, height, spp, a.max_depth, tmp)
         except Unsupported as e:
             raise SystemExit(f"{a.scene}: outside the Mitsuba twin's subset: {e}")
         scene = mi.load_dict(d)
         t0 = time.time()
-        img = mi.render(scene, seed=a.seed, spp=a.spp)
+        img = mi.render(scene, seed=a.seed, spp=spp)
         dt = time.time() - t0
     # (Writing an EXR with a pool of one thread deadlocks in 3.9.1: restore the pool first.)
     dr.set_thread_count(pool)
     mi.Bitmap(img).write(a.out)
-    print(f"mitsuba {mi.__version__} {mi.variant()} {width}x{height} spp {a.spp} seed {a.seed} "
+    print(f"mitsuba {mi.__version__} {mi.variant()} {width}x{height} spp {spp} seed {a.seed} "
           f"threads {a.threads}: {dt:.2f} s")
 
 

@@ -1,6 +1,10 @@
-//! Building the 8-wide BVH: binned SAH splits (in parallel for large nodes),
-//! each node taking up to eight children by splitting its largest child
-//! again, then the leaves' triangles copied into four-wide blocks.
+//! Building the 8-wide BVH: binned SAH splits, each node taking up to eight
+//! children by splitting its largest child again, then the leaves'
+//! triangles copied into four-wide blocks. With several threads, a large
+//! node's binary levels are divided ahead on all of them (`expand`), large
+//! ranges are binned and partitioned in parallel, and large nodes' children
+//! are built in parallel: the tree is the one-thread build's, node for node
+//! and item for item.
 
 use super::lanes::W;
 use super::node::{is_leaf, leaf, leaf_range, Node, Tri4, EMPTY, MAX_LEAF_ITEMS, OTHER};
@@ -50,10 +54,16 @@ const BINS: usize = 32;
 /// cache miss on a large mesh), primary and shadow rays the same, and 8-13%
 /// fewer bytes per triangle.
 const SPLIT_COST: f32 = 1.0;
-/// Below this many items a node's subtrees are built on one thread.
-const PARALLEL_ITEMS: usize = 16 * 1024;
+/// Below this many items a node's subtrees are built on one thread. 4k
+/// rather than 16k: bunny40k's 2-thread build 5.7-6.1 ms instead of
+/// 6.4-6.8 (the top node's eight children, about 5k items each but
+/// uneven, now split their work too), sphere1m's the same within noise.
+const PARALLEL_ITEMS: usize = 4 * 1024;
 /// Binning is split over threads above this many items.
 const PARALLEL_BINNING: usize = 64 * 1024;
+/// The two halves of a range of at least this many items are planned on
+/// two threads.
+const PARALLEL_PLANS: usize = 8 * 1024;
 /// Deepest node level: the traversal stack holds at most `(W − 1) · depth`
 /// pending children.
 pub(crate) const MAX_DEPTH: usize = 20;
@@ -140,7 +150,7 @@ impl Range {
 }
 
 /// How to divide a range.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Plan {
     /// Items whose centroid falls below bin `pos` (of `bins`) of `axis` go left.
     Bin {
@@ -469,6 +479,75 @@ fn area(lo: Vec3A, hi: Vec3A) -> f32 {
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
+/// The axis of `e`'s largest component (the first of equals).
+fn longest(e: Vec3) -> usize {
+    if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    }
+}
+
+/// Node levels that median splits, which at least quarter a range per
+/// level (two halvings of the up to seven a node takes), need at most to
+/// finish a range of `n` items (about log4(n)).
+fn levels_left(n: usize) -> usize {
+    (usize::BITS - n.leading_zeros()) as usize / 2 + 2
+}
+
+/// The plan of `r` at node level `depth` when it needs no bins: a leaf
+/// for four items or fewer, the median for coincident centroids (above a
+/// leaf's capacity) and for a range too deep for the SAH to finish under
+/// `MAX_DEPTH` (switching while median splits still fit: only degenerate
+/// inputs ever get there). `None`: the bins decide, and their plan is the
+/// same at every level where this stays `None`.
+fn forced(r: &Range, depth: usize) -> Option<Option<Plan>> {
+    let n = r.len();
+    if n <= 4 {
+        return Some(None);
+    }
+    let ce = r.cbounds.extent();
+    let axis = longest(ce);
+    if ce[axis] <= 0.0 {
+        // Coincident centroids: no plane separates them.
+        return Some((n > MAX_LEAF_ITEMS).then_some(Plan::Median { axis }));
+    }
+    if depth + levels_left(n) >= MAX_DEPTH {
+        return Some(Some(Plan::Median { axis }));
+    }
+    None
+}
+
+/// A range with its plan, made for node level `depth`, perhaps already
+/// divided into its halves (with their plans) ahead of its turn: see
+/// [`Builder::expand`].
+struct Part {
+    r: Range,
+    plan: Option<Plan>,
+    depth: usize,
+    halves: Option<Box<(Part, Part)>>,
+}
+
+impl Part {
+    fn new(r: Range, plan: Option<Plan>, depth: usize) -> Self {
+        Part {
+            r,
+            plan,
+            depth,
+            halves: None,
+        }
+    }
+}
+
+/// Binary levels of a node (1 + 2 + 4 = 7 divisions: its eight children
+/// when the tree is balanced) divided on several threads at once ahead of
+/// the node's loop, for ranges of `PARALLEL_ITEMS` or more.
+const SPECULATE_LEVELS: usize = 3;
+/// Ranges below this many items are not divided ahead of their turn.
+const SPECULATE_ITEMS: usize = 4 * 1024;
+
 struct Builder {
     pad: Vec3,
 }
@@ -478,30 +557,10 @@ impl Builder {
     /// `items` are the range's references; `depth` is the node level the
     /// range's node would sit at.
     fn plan(&self, items: &[PrimRef], r: &Range, depth: usize) -> Option<Plan> {
-        let n = r.len();
-        if n <= 4 {
-            return None;
+        if let Some(plan) = forced(r, depth) {
+            return plan;
         }
-        let ce = r.cbounds.extent();
-        let axis = if ce.x >= ce.y && ce.x >= ce.z {
-            0
-        } else if ce.y >= ce.z {
-            1
-        } else {
-            2
-        };
-        if ce[axis] <= 0.0 {
-            // Coincident centroids: no plane separates them.
-            return (n > MAX_LEAF_ITEMS).then_some(Plan::Median { axis });
-        }
-        // Median splits at least quarter a range per level (two halvings of
-        // the up to seven a node takes), so at most about log4(n) more
-        // levels finish it: switch to them while that still
-        // fits under MAX_DEPTH (only degenerate inputs ever get here).
-        let levels_left = (usize::BITS - n.leading_zeros()) as usize / 2 + 2;
-        if depth + levels_left >= MAX_DEPTH {
-            return Some(Plan::Median { axis });
-        }
+        let (n, ce) = (r.len(), r.cbounds.extent());
         let best = if n < SMALL_RANGE {
             serial_sweep::<SMALL_BINS>(items, &r.cbounds, ce)
         } else if n < PARALLEL_BINNING {
@@ -515,7 +574,7 @@ impl Builder {
             return None;
         }
         if !best.0.is_finite() {
-            return Some(Plan::Median { axis });
+            return Some(Plan::Median { axis: longest(ce) });
         }
         Some(Plan::Bin {
             axis: best.1,
@@ -569,8 +628,88 @@ impl Builder {
         )
     }
 
+    /// The plans of the two halves `a` and `b` of a range whose items are
+    /// `items`: on two threads when the range is large (each plan is a pass
+    /// over its half; a half of more than `PARALLEL_BINNING` items is also
+    /// binned in parallel chunks).
+    fn plans(
+        &self,
+        items: &[PrimRef],
+        a: &Range,
+        b: &Range,
+        depth: usize,
+    ) -> (Option<Plan>, Option<Plan>) {
+        let (ia, ib) = items.split_at(a.len());
+        if a.len() + b.len() >= PARALLEL_PLANS && rayon::current_num_threads() > 1 {
+            rayon::join(|| self.plan(ia, a, depth), || self.plan(ib, b, depth))
+        } else {
+            (self.plan(ia, a, depth), self.plan(ib, b, depth))
+        }
+    }
+
     fn set_child(&self, node: &mut Node, i: usize, c: u32, r: &Range) {
         node.set(i, c, r.bounds.min - self.pad, r.bounds.max + self.pad);
+    }
+
+    /// Divides `p` (its items are `items`) into its halves with their plans
+    /// for node level `depth`: the halves divided ahead of time if there
+    /// are any, else dividing now. Halves divided ahead carry plans made
+    /// for a level up to two above `depth` (a range of a node's binary
+    /// levels may end up a child, whose halves are then its node's); their
+    /// plans are the same at `depth`, because `expand` only divides ranges
+    /// far enough from `MAX_DEPTH` that the median is not forced on them or
+    /// their halves any sooner (see [`forced`]).
+    fn halves(&self, items: &mut [PrimRef], p: Part, depth: usize) -> (Part, Part) {
+        let (mut a, mut b) = match p.halves {
+            Some(h) => *h,
+            None => {
+                let plan = p.plan.expect("a range with a plan");
+                let (a, b) = self.divide(items, &p.r, plan);
+                let (pa, pb) = self.plans(items, &a, &b, depth);
+                (Part::new(a, pa, depth), Part::new(b, pb, depth))
+            }
+        };
+        for h in [&mut a, &mut b] {
+            debug_assert!(h.depth <= depth && depth <= h.depth + 2);
+            debug_assert!(
+                forced(&h.r, depth).is_none_or(|plan| plan == h.plan),
+                "a plan made a level up differs"
+            );
+            h.depth = depth;
+        }
+        (a, b)
+    }
+
+    /// Divides `p` (its items are `items`) and its halves down to `levels`
+    /// binary levels, the two halves of each range on two threads, with
+    /// the halves' plans made for node level `depth`. Each division is the
+    /// one the node's loop (or a child's, one or more levels down) makes
+    /// when it gets there: a range with a plan is always divided, by the
+    /// same plan and from the same order of items, whichever thread does it
+    /// and when. The plans are made for `depth` and used perhaps a few
+    /// levels deeper: only ranges whose plan is the same at every one of
+    /// those levels are divided ahead (see [`forced`]).
+    fn expand(&self, items: &mut [PrimRef], p: &mut Part, depth: usize, levels: usize) {
+        let n = p.r.len();
+        if levels == 0
+            || n < SPECULATE_ITEMS
+            || p.plan.is_none()
+            || p.depth + SPECULATE_LEVELS + levels_left(n) >= MAX_DEPTH
+        {
+            return;
+        }
+        if p.halves.is_none() {
+            let plan = p.plan.expect("checked");
+            let (a, b) = self.divide(items, &p.r, plan);
+            let (pa, pb) = self.plans(items, &a, &b, depth);
+            p.halves = Some(Box::new((Part::new(a, pa, depth), Part::new(b, pb, depth))));
+        }
+        let (a, b) = &mut **p.halves.as_mut().expect("just made");
+        let (ia, ib) = items.split_at_mut(a.r.len());
+        rayon::join(
+            || self.expand(ia, a, depth, levels - 1),
+            || self.expand(ib, b, depth, levels - 1),
+        );
     }
 
     /// Builds the subtree over `r` (whose items are exactly `refs`) and
@@ -585,82 +724,112 @@ impl Builder {
         depth: usize,
         out: &mut Vec<Node>,
     ) -> u32 {
-        let Some(plan) = plan else {
+        self.subtree_of(refs, Part::new(r, plan, depth), depth, out)
+    }
+
+    /// [`Builder::subtree`] of a range that may be divided already.
+    fn subtree_of(
+        &self,
+        refs: &mut [PrimRef],
+        mut part: Part,
+        depth: usize,
+        out: &mut Vec<Node>,
+    ) -> u32 {
+        let r = part.r;
+        if part.plan.is_none() {
             return leaf(r.begin, 1);
-        };
+        }
+        // (On one thread the parallel path would only add copies.)
+        let parallel = r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1;
+        if parallel {
+            self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS);
+        }
         // Up to W children: split the largest child that wants splitting.
         // (On the stack: a vector here was an allocation per node.)
-        let mut all = [(r, None); W];
-        let (a, b) = self.divide(refs_of(refs, &r, &r), &r, plan);
-        let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
-        let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
-        (all[0], all[1]) = ((a, pa), (b, pb));
+        let mut all: [Option<Part>; W] = Default::default();
+        let (a, b) = self.halves(refs, part, depth + 1);
+        (all[0], all[1]) = (Some(a), Some(b));
         let mut len = 2;
         while len < W {
             let pick = all[..len]
                 .iter()
+                .map(|k| k.as_ref().expect("filled"))
                 .enumerate()
-                .filter(|(_, k)| k.1.is_some())
+                .filter(|(_, k)| k.plan.is_some())
                 .max_by(|x, y| {
-                    x.1 .0
+                    x.1.r
                         .bounds
                         .surface_area()
-                        .total_cmp(&y.1 .0.bounds.surface_area())
+                        .total_cmp(&y.1.r.bounds.surface_area())
                 })
                 .map(|(i, _)| i);
             let Some(i) = pick else { break };
-            let (k, p) = all[i];
-            let (a, b) = self.divide(refs_of(refs, &r, &k), &k, p.expect("filtered"));
-            let pa = self.plan(refs_of(refs, &r, &a), &a, depth + 1);
-            let pb = self.plan(refs_of(refs, &r, &b), &b, depth + 1);
+            let k = all[i].take().expect("filled");
+            let kr = k.r;
+            let (a, b) = self.halves(refs_of(refs, &r, &kr), k, depth + 1);
             // `a` and `b` take `k`'s place, in order.
-            all.copy_within(i + 1..len, i + 2);
-            (all[i], all[i + 1]) = ((a, pa), (b, pb));
+            for j in (i + 1..len).rev() {
+                all[j + 1] = all[j].take();
+            }
+            (all[i], all[i + 1]) = (Some(a), Some(b));
             len += 1;
         }
-        let kids = &all[..len];
+        let kids = all.into_iter().take(len).map(|k| k.expect("filled"));
         let at = out.len();
         out.push(Node::EMPTY);
         let mut node = Node::EMPTY;
-        // (On one thread the parallel path would only add copies.)
-        if r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1 {
+        if parallel {
             // Children in parallel, each into its own array, then appended
             // with their node indices shifted.
             let mut slices = Vec::with_capacity(W);
             let mut rest = &mut *refs;
             let mut base = r.begin;
-            for (k, p) in kids {
-                let (mine, tail) = rest.split_at_mut(k.end - base);
-                slices.push((&mut mine[k.begin - base..], *k, *p));
+            for k in kids {
+                let (mine, tail) = rest.split_at_mut(k.r.end - base);
+                let begin = k.r.begin - base;
+                base = k.r.end;
+                slices.push((&mut mine[begin..], k));
                 rest = tail;
-                base = k.end;
             }
-            let subs: Vec<(u32, Vec<Node>)> = slices
+            let subs: Vec<(u32, Range, Vec<Node>)> = slices
                 .into_par_iter()
-                .map(|(s, k, p)| {
+                .map(|(s, k)| {
                     let mut v = Vec::with_capacity(s.len() / 8 + 1);
-                    let c = self.subtree(s, k, p, depth + 1, &mut v);
-                    (c, v)
+                    let kr = k.r;
+                    let c = self.subtree_of(s, k, depth + 1, &mut v);
+                    (c, kr, v)
                 })
                 .collect();
-            for (i, ((c, v), (k, _))) in subs.into_iter().zip(kids).enumerate() {
-                let shift = out.len() as u32;
-                let c = if is_leaf(c) { c } else { c + shift };
-                out.extend(v.into_iter().map(|mut n| {
-                    for ch in &mut n.child {
-                        if !is_leaf(*ch) {
-                            *ch += shift;
-                        }
-                    }
-                    n
-                }));
-                self.set_child(&mut node, i, c, k);
+            // Appended on all threads: node `g` of the children's nodes
+            // (laid out one child's after another) comes from the child
+            // whose nodes start at or before it, shifted by where they land.
+            let mut starts = Vec::with_capacity(subs.len() + 1);
+            let mut total = 0;
+            for (c, k, v) in &subs {
+                starts.push(total);
+                let shift = (out.len() + total) as u32;
+                let c = if is_leaf(*c) { *c } else { c + shift };
+                self.set_child(&mut node, starts.len() - 1, c, k);
+                total += v.len();
             }
+            let base = out.len();
+            out.par_extend((0..total).into_par_iter().with_min_len(1024).map(|g| {
+                let i = starts.partition_point(|&s| s <= g) - 1;
+                let shift = (base + starts[i]) as u32;
+                let mut n = subs[i].2[g - starts[i]];
+                for ch in &mut n.child {
+                    if !is_leaf(*ch) {
+                        *ch += shift;
+                    }
+                }
+                n
+            }));
         } else {
-            for (i, (k, p)) in kids.iter().enumerate() {
-                let sub = refs_of(refs, &r, k);
-                let c = self.subtree(sub, *k, *p, depth + 1, out);
-                self.set_child(&mut node, i, c, k);
+            for (i, k) in kids.enumerate() {
+                let kr = k.r;
+                let sub = refs_of(refs, &r, &kr);
+                let c = self.subtree_of(sub, k, depth + 1, out);
+                self.set_child(&mut node, i, c, &kr);
             }
         }
         out[at] = node;
@@ -676,43 +845,104 @@ fn refs_of<'a>(refs: &'a mut [PrimRef], r: &Range, k: &Range) -> &'a mut [PrimRe
 /// Turns the leaves' item ranges into ranges of [`Tri4`] blocks and fills
 /// the blocks (leaves in item order, so each leaf's blocks are contiguous).
 fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<Tri4> {
+    use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
     // The leaves tile the items in order; until here a leaf's reference
-    // holds only its first item. Mark those, then each leaf runs to the
-    // next one's first item.
-    let mut leaf_len = vec![0u8; refs.len()];
-    for n in nodes.iter() {
-        for &c in &n.child {
+    // holds only its first item. Mark those (a bit per item), then each
+    // leaf runs to the next one's first item.
+    let n = refs.len();
+    let starts: Vec<AtomicU64> = (0..n.div_ceil(64)).map(|_| AtomicU64::new(0)).collect();
+    nodes.par_iter().for_each(|node| {
+        for &c in &node.child {
             if is_leaf(c) && c != EMPTY {
-                leaf_len[leaf_range(c).0] = 1;
+                let s = leaf_range(c).0;
+                starts[s / 64].fetch_or(1 << (s % 64), Relaxed);
             }
         }
-    }
-    let mut end = refs.len();
-    for s in (0..refs.len()).rev() {
-        if leaf_len[s] != 0 {
-            debug_assert!(end - s <= MAX_LEAF_ITEMS);
-            leaf_len[s] = (end - s) as u8;
-            end = s;
+    });
+    debug_assert!(
+        n == 0 || starts[0].load(Relaxed) & 1 != 0,
+        "the first item starts a leaf"
+    );
+    let word = |w: usize| starts.get(w).map_or(0, |x| x.load(Relaxed));
+    // The first item of the leaf after the one starting at `s` (or `n`): a
+    // leaf holds at most 16 items, so that is in this word or the next.
+    let next = |s: usize| {
+        let (w, b) = (s / 64, s % 64);
+        let here = word(w) & (u64::MAX << b << 1);
+        if here != 0 {
+            return w * 64 + here.trailing_zeros() as usize;
         }
+        let after = word(w + 1);
+        if after != 0 {
+            (w + 1) * 64 + after.trailing_zeros() as usize
+        } else {
+            n
+        }
+    };
+    // The leaves starting in items `[from, to)` (`from` a multiple of
+    // 64): (first item, items).
+    let leaves = |from: usize, to: usize| {
+        (from / 64..to.div_ceil(64))
+            .flat_map(move |w| {
+                let mut bits = word(w);
+                std::iter::from_fn(move || {
+                    (bits != 0).then(|| {
+                        let s = w * 64 + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        s
+                    })
+                })
+            })
+            .map(move |s| {
+                let end = next(s);
+                debug_assert!(end - s <= MAX_LEAF_ITEMS);
+                (s, end - s)
+            })
+    };
+    // Blocks of the leaves starting in each chunk of items, and where each
+    // chunk's blocks start (leaves in item order).
+    const CHUNK: usize = 16 * 1024;
+    let chunk_blocks: Vec<usize> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            leaves(c * CHUNK, ((c + 1) * CHUNK).min(n))
+                .map(|(_, k)| k.div_ceil(4))
+                .sum()
+        })
+        .collect();
+    let total: usize = chunk_blocks.iter().sum();
+    // Each leaf's reference to its blocks, at its first item; every
+    // block's items, filled chunk by chunk into their own slices.
+    let mut leaf_ref = vec![0u32; n];
+    let mut block_items: Vec<(u32, u8)> = vec![(0, 0); total];
+    let mut pieces = Vec::with_capacity(chunk_blocks.len());
+    let mut rest = &mut block_items[..];
+    let mut first = 0;
+    for &k in &chunk_blocks {
+        let (mine, tail) = rest.split_at_mut(k);
+        pieces.push((first, mine));
+        rest = tail;
+        first += k;
     }
-    debug_assert_eq!(end, 0, "the first item starts a leaf");
-    // Leaves in item order with their first block, and every block's
-    // items.
-    let mut first_block = vec![0u32; refs.len()];
-    let mut block_items: Vec<(u32, u8)> = Vec::with_capacity(refs.len() / 3);
-    for (s, &k) in leaf_len.iter().enumerate() {
-        if k > 0 {
-            first_block[s] = block_items.len() as u32;
-            for b in (0..k).step_by(4) {
-                block_items.push((s as u32 + b as u32, (k - b).min(4)));
+    leaf_ref
+        .par_chunks_mut(CHUNK)
+        .zip(pieces)
+        .enumerate()
+        .for_each(|(c, (refs_out, (first, blocks_out)))| {
+            let mut b = 0;
+            for (s, k) in leaves(c * CHUNK, ((c + 1) * CHUNK).min(n)) {
+                let nb = k.div_ceil(4);
+                refs_out[s - c * CHUNK] = leaf(first + b, nb);
+                for (j, out) in blocks_out[b..b + nb].iter_mut().enumerate() {
+                    *out = ((s + 4 * j) as u32, (k - 4 * j).min(4) as u8);
+                }
+                b += nb;
             }
-        }
-    }
+        });
     nodes.par_iter_mut().for_each(|n| {
         for c in &mut n.child {
             if is_leaf(*c) && *c != EMPTY {
-                let s = leaf_range(*c).0;
-                *c = leaf(first_block[s] as usize, (leaf_len[s] as usize).div_ceil(4));
+                *c = leaf_ref[leaf_range(*c).0];
             }
         }
     });

@@ -267,7 +267,7 @@ fn a_chain_started_at_any_level_ends_where_it_was_measured() {
     }
 }
 
-/// The parallel path (children of 16k items or more built on other
+/// The parallel path (children of 4k items or more built on other
 /// threads) plans for the same levels as the serial one: started at
 /// level 12, where the median takes over within a few levels, it
 /// builds the one-thread build's nodes, in the same order.
@@ -383,4 +383,85 @@ fn parallel_bounds_and_bins_equal_one_pass() {
     whole.add(&items, &map);
     assert_eq!(merged.count, whole.count);
     assert_eq!((merged.lo, merged.hi), (whole.lo, whole.hi));
+}
+
+/// The parallel partition gives the in-place loop's result item for item
+/// (not only the same sides: the same order within each, so the tree
+/// built on top is the same), with the same bounds, for unordered and
+/// sorted items, any share on the left (none and all included), and
+/// sizes around its chunks.
+#[test]
+fn the_parallel_partition_permutes_as_the_serial_one() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .expect("a thread pool");
+    let mut r = Rng::new(47);
+    for n in [PARALLEL_PARTITION, 3 * 8192 + 17, 100_003] {
+        let mut items = boxes((0..n).map(|_| r.v(0.0, 1.0)), Vec3::splat(0.01));
+        for sorted in [false, true] {
+            if sorted {
+                items.sort_by(|a, b| a.centroid().x.total_cmp(&b.centroid().x));
+            }
+            for cut in [-1.0, 0.01, 0.3, 0.5, 0.97, 2.0] {
+                let left = |c: Vec3A| c.x < cut;
+                let mut serial = items.clone();
+                let s = fused_partition(&mut serial, left);
+                let mut par = items.clone();
+                let p = pool.install(|| parallel_partition(&mut par, left));
+                assert_eq!(s, p, "n {n} cut {cut}");
+                let ids = |v: &[PrimRef]| v.iter().map(|p| p.id()).collect::<Vec<u32>>();
+                assert!(ids(&serial) == ids(&par), "n {n} cut {cut} sorted {sorted}");
+            }
+        }
+    }
+}
+
+/// Dividing ranges ahead of their turn on several threads (the top
+/// levels: `expand`, the parallel partition, the halves planned on two
+/// threads) builds the one-thread build's nodes in the same order, and
+/// leaves the items in the same order: on a large range mixing a uniform
+/// spread, dense clusters and piles of coincident boxes (which only the
+/// median divides), unordered and sorted along an axis, at levels where
+/// every plan is the bins' and where the median takes over sooner.
+#[test]
+fn dividing_ahead_builds_the_serial_tree() {
+    let b = Builder { pad: Vec3::ZERO };
+    let mut r = Rng::new(48);
+    let mut centres: Vec<Vec3> = (0..150_000).map(|_| r.v(0.0, 100.0)).collect();
+    for _ in 0..40 {
+        let c = r.v(0.0, 100.0);
+        centres.extend((0..2000).map(|_| c + r.v(0.0, 0.01)));
+    }
+    let pile = r.v(0.0, 100.0);
+    centres.extend((0..6000).map(|_| pile));
+    let items = boxes(centres, Vec3::splat(0.05));
+    let mut sorted = items.clone();
+    sorted.sort_by(|a, b| a.centroid().y.total_cmp(&b.centroid().y));
+    for (items, start) in [(&items, 0), (&sorted, 0), (&items, 5)] {
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            pool.install(|| {
+                let mut items = items.clone();
+                let rg = range(&items);
+                let plan = b.plan(&items, &rg, start);
+                let mut out = Vec::new();
+                b.subtree(&mut items, rg, plan, start, &mut out);
+                let ids: Vec<u32> = items.iter().map(|p| p.id()).collect();
+                (format!("{out:?}"), ids)
+            })
+        };
+        let one = run(1);
+        assert!(
+            one == run(2),
+            "2 threads built another tree (from level {start})"
+        );
+        assert!(
+            one == run(3),
+            "3 threads built another tree (from level {start})"
+        );
+    }
 }

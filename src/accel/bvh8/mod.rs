@@ -7,7 +7,7 @@
 //!   256 bytes; `Tri4`: four triangles' vertices, 160 bytes) and prefetch;
 //!   `lanes.rs`: the eight-lane arithmetic of the box test.
 //! - `build.rs`: binned SAH (32 bins, costs counted in blocks of four),
-//!   children built in parallel above 16k items, a branch-free partition
+//!   children built in parallel above 4k items, a branch-free partition
 //!   for unordered ranges, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
 //!   nearest-child-first closest hit, unordered any hit with early exit.

@@ -167,7 +167,7 @@ fn build_quality_stays_where_it_was_measured() {
     }
 }
 
-/// The parallel build (a range of 16k items or more has its children
+/// The parallel build (a range of 4k items or more has its children
 /// built on other threads, their nodes appended and renumbered) makes
 /// the one-thread build's tree, node for node and block for block.
 #[test]
@@ -188,6 +188,48 @@ fn the_parallel_build_equals_the_serial_one() {
         assert_eq!(format!("{:?}", a.planes), format!("{:?}", b.planes));
     }
     assert_eq!(format!("{:?}", one.tris), format!("{:?}", four.tris));
+}
+
+/// The same on a mesh built from its vertex and index buffers (the
+/// embedder's path, `query::MeshScene`), large enough that its top levels
+/// are divided ahead and partitioned on several threads: a 300×300 grid
+/// of bumpy quads (180k triangles) stored row by row, on 1 and 2 threads.
+#[test]
+fn a_mesh_built_on_two_threads_equals_the_serial_one() {
+    let k = 300;
+    let vertices: Vec<Vec3> = (0..=k)
+        .flat_map(|i| {
+            (0..=k).map(move |j| {
+                let (x, z) = (i as f32 * 0.1, j as f32 * 0.1);
+                Vec3::new(x, (x * 1.3).sin() * (z * 0.7).cos(), z)
+            })
+        })
+        .collect();
+    let at = |i: usize, j: usize| (i * (k + 1) + j) as u32;
+    let indices: Vec<[u32; 3]> = (0..k)
+        .flat_map(|i| (0..k).map(move |j| (i, j)))
+        .flat_map(|(i, j)| {
+            [
+                [at(i, j), at(i + 1, j), at(i, j + 1)],
+                [at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)],
+            ]
+        })
+        .collect();
+    let build = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool")
+            .install(|| Bvh8::from_mesh(&vertices, &indices))
+    };
+    let (one, two) = (build(1), build(2));
+    assert_eq!(one.nodes.len(), two.nodes.len());
+    assert!(one.nodes.len() > 5_000, "{}", one.nodes.len());
+    for (a, b) in one.nodes.iter().zip(&two.nodes) {
+        assert_eq!(a.child, b.child);
+        assert_eq!(format!("{:?}", a.planes), format!("{:?}", b.planes));
+    }
+    assert_eq!(format!("{:?}", one.tris), format!("{:?}", two.tris));
 }
 
 /// Every item sits in exactly one lane of one block, and each leaf's
