@@ -155,13 +155,27 @@ impl Whitted {
                 let mut sum = Vec3::ZERO;
                 for u in cx.stream.split_2d(k) {
                     let inc = sample_light(light, from.from.p, u);
-                    sum += self.lit(cx, at, from, light, &inc);
+                    sum += self.lit(
+                        cx,
+                        at,
+                        from,
+                        inc.to_light,
+                        inc.color,
+                        ShadowTarget::of(light, &inc),
+                    );
                 }
                 color += sum / k as f32;
                 continue;
             }
             let inc = world.incident(i, p);
-            color += self.lit(cx, at, from, light, &inc);
+            color += self.lit(
+                cx,
+                at,
+                from,
+                inc.to_light,
+                inc.color,
+                ShadowTarget::of(light, &inc),
+            );
         }
 
         if depth >= self.bounces {
@@ -261,31 +275,38 @@ impl Whitted {
         }
     }
 
-    /// Phong light reflected towards `-d` from the light arriving as `inc`
-    /// from `light`, times what of it gets through (one shadow ray when
-    /// shadows are on).
+    /// Phong light reflected towards `-d` from light of `color` arriving
+    /// from `to_light`, times what of it gets through from `target` (one
+    /// shadow ray when shadows are on).
+    ///
+    /// Inlined, with the light's direction and colour by value: called out
+    /// of line with the [`Incident`] by reference, it read the colour with
+    /// a load that straddled the halves of the 16-byte store that had just
+    /// written it, which a CPU cannot forward (perf, scene6_07 at 16 spp:
+    /// that one load was a fifth of this function's time).
+    #[inline(always)]
     fn lit<O: RayObserver>(
         &self,
         cx: &mut Trace<O>,
         at: &Shaded,
         from: &mut Spawn,
-        light: &RenderLight,
-        inc: &Incident,
+        to_light: Vec3,
+        color: Vec3,
+        target: ShadowTarget,
     ) -> Vec3 {
         let Shaded { n, ng, d, .. } = *at;
-        if n != ng && inc.to_light.dot(ng) <= 0.0 {
+        if n != ng && to_light.dot(ng) <= 0.0 {
             // Smooth shading: a light behind the geometric surface does not
             // shine through it, whatever the interpolated normal says.
             return Vec3::ZERO;
         }
-        let reflected = phong_light(&at.m, n, inc.to_light, -d, inc.color);
+        let reflected = phong_light(&at.m, n, to_light, -d, color);
         if reflected == Vec3::ZERO {
             return reflected; // nothing to shadow: no shadow ray needed
         }
         // A light exactly at the point (zero direction) has nothing in
         // between, and a zero-direction shadow ray would be meaningless.
-        if self.shadows && inc.to_light != Vec3::ZERO {
-            let target = ShadowTarget::of(light, inc);
+        if self.shadows && to_light != Vec3::ZERO {
             reflected * self.light_through(cx, from, at.time, target, at.depth)
         } else {
             reflected
@@ -296,6 +317,12 @@ impl Whitted {
     /// from `target` at instant `time`: 0 or 1 with opaque shadows; with
     /// transparent shadows the product of the `transparentColor` of
     /// everything in between.
+    ///
+    /// Inlined (the opaque case): out of line, the target came through
+    /// memory written in pieces and read back wider, a store-forwarding
+    /// stall at every shadow ray (perf, scene6_07 at 16 spp: a fifth of
+    /// this function's samples on the load after it).
+    #[inline(always)]
     fn light_through<O: RayObserver>(
         &self,
         cx: &mut Trace<O>,
@@ -309,6 +336,19 @@ impl Whitted {
             let blocked = cx.blocked(&shadow, tmax, from.leaving, depth);
             return if blocked { Vec3::ZERO } else { Vec3::ONE };
         }
+        self.filtered_through(cx, from, time, target, depth)
+    }
+
+    /// [`light_through`](Self::light_through) with transparent shadows.
+    #[inline(never)]
+    fn filtered_through<O: RayObserver>(
+        &self,
+        cx: &mut Trace<O>,
+        from: &mut Spawn,
+        time: f32,
+        target: ShadowTarget,
+        depth: u32,
+    ) -> Vec3 {
         let Trace {
             world,
             counters: c,
