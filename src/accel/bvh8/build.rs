@@ -547,8 +547,9 @@ struct Part {
     /// of (`None`: it stays one child). `plan`, except within a wide node
     /// (the halves of a range with a wide plan, and theirs): there a
     /// division costs no node test, so any range of two items or more
-    /// divides by its cheapest plane ([`free_split`]), the largest first,
-    /// while the node has slots.
+    /// divides by its cheapest plane when that pays within two levels
+    /// ([`Builder::free_split`]), the largest first, while the node has
+    /// slots.
     split: Option<Plan>,
     /// Whether the range is within a wide node (its halves are too).
     wide: bool,
@@ -569,35 +570,13 @@ impl Part {
     }
 
     /// A range within a wide node, whose items are `items`.
-    fn within(items: &[PrimRef], r: Range, plan: Option<Plan>, depth: usize) -> Self {
+    fn within(b: &Builder, items: &[PrimRef], r: Range, plan: Option<Plan>, depth: usize) -> Self {
         Part {
-            split: free_split(items, &r),
+            split: b.free_split(items, &r),
             wide: true,
             ..Part::new(r, plan, depth)
         }
     }
-}
-
-/// The cheapest plane of a small range within a wide node, if a plane
-/// separates its items. A division within a node adds no node test, and
-/// is made even when it alone does not lower the range's `area × blocks`:
-/// the items of a room's walls in one range have the room's box, and
-/// peeling one wall off leaves the rest with it (and the same blocks), so
-/// only the next divisions pay; [`Builder::wide_cost`] weighs the node's
-/// children as they come out against the leaf.
-fn free_split(items: &[PrimRef], r: &Range) -> Option<Plan> {
-    let (n, ce) = (r.len(), r.cbounds.extent());
-    debug_assert!(n <= MAX_LEAF_ITEMS);
-    if n < 2 {
-        return None;
-    }
-    let (cost, axis, pos) = serial_sweep::<SMALL_BINS>(items, &r.cbounds, ce);
-    cost.is_finite().then_some(Plan::Bin {
-        axis,
-        pos,
-        bins: SMALL_BINS,
-        wide: false,
-    })
 }
 
 /// The child the node loop divides next: the largest by surface area of
@@ -679,12 +658,69 @@ impl Builder {
         Some(bin(false))
     }
 
+    /// The cheapest plane of a small range within a wide node (whose items
+    /// are `items`), if dividing by it lowers the range's `area × blocks`,
+    /// or dividing by it and then each half by its own cheapest plane does.
+    /// A division within a node adds no node test, only children. The
+    /// second level is needed for enclosing geometry: the items of a
+    /// room's walls in one range have the room's box, and peeling one wall
+    /// off leaves the rest with it and often the same blocks, so only the
+    /// next division pays. [`Builder::wide_cost`] then weighs the node's
+    /// children as they come out against the leaf.
+    fn free_split(&self, items: &[PrimRef], r: &Range) -> Option<Plan> {
+        let n = r.len();
+        debug_assert!(n <= MAX_LEAF_ITEMS);
+        if n < 2 {
+            return None;
+        }
+        // (own cost, cheapest plane's cost, its axis and bin)
+        let cost = |items: &[PrimRef], r: &Range| {
+            let own = r.bounds.surface_area() * blocks(r.len());
+            if r.len() < 2 {
+                return (own, own, 0, 0);
+            }
+            let (c, axis, pos) = serial_sweep::<SMALL_BINS>(items, &r.cbounds, r.cbounds.extent());
+            (own, c, axis, pos)
+        };
+        let (own, one, axis, pos) = cost(items, r);
+        if !one.is_finite() {
+            return None;
+        }
+        let plan = Plan::Bin {
+            axis,
+            pos,
+            bins: SMALL_BINS,
+            wide: false,
+        };
+        if one < own {
+            return Some(plan);
+        }
+        let mut copy = [PrimRef::skipped(); MAX_LEAF_ITEMS];
+        let buf = &mut copy[..n];
+        buf.copy_from_slice(items);
+        let whole = Range {
+            begin: 0,
+            end: n,
+            ..*r
+        };
+        let (a, b) = self.divide(buf, &whole, plan);
+        let two: f32 = [a, b]
+            .iter()
+            .map(|h| {
+                let (own, c, _, _) = cost(&buf[h.begin..h.end], h);
+                own.min(c)
+            })
+            .sum();
+        (two < own).then_some(plan)
+    }
+
     /// The SAH cost of making the small range `r` (its items are `items`)
     /// an 8-wide node whose first division is `first`: one node test
     /// (`SPLIT_COST`, as a binary level is charged) plus its children's
     /// `area × blocks`, the children being those the node loop makes
     /// (within a wide node: [`Part::split`]), found here on a copy of the
-    /// items.
+    /// items. The binary SAH charges a node test per binary level; a wide
+    /// node's up to three levels of divisions cost one.
     fn wide_cost(&self, items: &[PrimRef], r: &Range, first: Plan) -> f32 {
         let n = items.len();
         debug_assert!(n <= MAX_LEAF_ITEMS && n == r.len());
@@ -698,8 +734,8 @@ impl Builder {
         };
         let mut kids = [(whole, None); W];
         let (a, b) = self.divide(buf, &whole, first);
-        kids[0] = (a, free_split(&buf[a.begin..a.end], &a));
-        kids[1] = (b, free_split(&buf[b.begin..b.end], &b));
+        kids[0] = (a, self.free_split(&buf[a.begin..a.end], &a));
+        kids[1] = (b, self.free_split(&buf[b.begin..b.end], &b));
         let mut len = 2;
         while len < W {
             let Some(i) = next_to_split(kids[..len].iter().map(|(k, s)| (k, s.is_some()))) else {
@@ -708,8 +744,8 @@ impl Builder {
             let (k, s) = kids[i];
             let (a, b) = self.divide(&mut buf[k.begin..k.end], &k, s.expect("divides"));
             kids.copy_within(i + 1..len, i + 2);
-            kids[i] = (a, free_split(&buf[a.begin..a.end], &a));
-            kids[i + 1] = (b, free_split(&buf[b.begin..b.end], &b));
+            kids[i] = (a, self.free_split(&buf[a.begin..a.end], &a));
+            kids[i + 1] = (b, self.free_split(&buf[b.begin..b.end], &b));
             len += 1;
         }
         let leaves: f32 = kids[..len]
@@ -819,8 +855,8 @@ impl Builder {
                 if wide {
                     let (ia, ib) = items.split_at(a.len());
                     (
-                        Part::within(ia, a, pa, depth),
-                        Part::within(ib, b, pb, depth),
+                        Part::within(self, ia, a, pa, depth),
+                        Part::within(self, ib, b, pb, depth),
                     )
                 } else {
                     (Part::new(a, pa, depth), Part::new(b, pb, depth))
