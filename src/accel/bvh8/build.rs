@@ -158,8 +158,7 @@ enum Plan {
     /// Items whose centroid falls below bin `pos` (of `bins`) of `axis` go left.
     /// `wide`: a small range that the SAH gives an 8-wide node rather than
     /// a leaf (see [`Builder::wide_cost`]), so that its halves, divided
-    /// within a node, go on dividing while that lowers their own cost
-    /// (see [`Part::split`]).
+    /// within a node, go on dividing where that pays (see [`Part::split`]).
     Bin {
         axis: usize,
         pos: usize,
@@ -546,10 +545,9 @@ struct Part {
     /// How the node loop divides the range within the node it is a child
     /// of (`None`: it stays one child). `plan`, except within a wide node
     /// (the halves of a range with a wide plan, and theirs): there a
-    /// division costs no node test, so any range of two items or more
-    /// divides by its cheapest plane when that pays within two levels
-    /// ([`Builder::free_split`]), the largest first, while the node has
-    /// slots.
+    /// division costs no node test, so a range divides by its cheapest
+    /// plane when that pays within two levels ([`Builder::free_split`]);
+    /// the node loop takes the largest first while the node has slots.
     split: Option<Plan>,
     /// Whether the range is within a wide node (its halves are too).
     wide: bool,
@@ -603,13 +601,13 @@ const SPECULATE_ITEMS: usize = 4 * 1024;
 
 /// Builds of up to this many items weigh a wide node against each small
 /// range's leaf (see [`Builder::wide_cost`]); larger ones (meshes) only
-/// the binary split. On meshes the wide nodes cut leaf tests by 10-15%
-/// (bunny40k, sphere1m) but the rays were no faster (nor on the 16k-item
-/// sphere_lights_knot scene: each extra node level is another load on a
-/// tree far larger than L1), while the tree took 8-11% more bytes and the
-/// build 30% longer (the wide node's children are found by dividing a
-/// copy of the range). On scenes of a few items, rooms and rows of
-/// spheres, renders took 2-10% less time.
+/// the binary split. On meshes (bunny40k, sphere1m, with this limit
+/// lifted) the wide nodes cut leaf tests by 12-15% but the rays were no
+/// faster (within a few percent either way: each extra node level is
+/// another load on a tree far larger than the caches), while the tree
+/// took 8-11% more bytes and the build 40-50% longer (each small range's
+/// node is first found on a copy). The scenes of a few items it is for,
+/// rooms and rows of spheres, rendered 3-8% faster.
 const WIDE_ITEMS: usize = 4096;
 
 struct Builder {
