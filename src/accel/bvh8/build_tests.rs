@@ -94,6 +94,7 @@ fn the_plan_takes_the_cheapest_bin_plane() {
         else {
             continue;
         };
+        let (axis, pos, bins) = (axis as usize, pos as usize, bins as usize);
         assert_eq!(bins, if n < SMALL_RANGE { SMALL_BINS } else { BINS });
         let map = BinMap::new(&rg.cbounds);
         let bin = |p: &PrimRef, a: usize| {
@@ -166,7 +167,7 @@ fn the_plan_stops_at_leaves_and_falls_back_to_the_median() {
         let items = boxes((0..100).map(|_| r.v(0.0, 1.0) * spread), Vec3::splat(0.1));
         let deep = MAX_DEPTH - 5;
         assert!(
-            matches!(plan(&items, deep), Some(Plan::Median { axis: a }) if a == axis),
+            matches!(plan(&items, deep), Some(Plan::Median { axis: a }) if a as usize == axis),
             "axis {axis}"
         );
         assert!(matches!(plan(&items, deep - 1), Some(Plan::Bin { .. })));
@@ -193,6 +194,7 @@ fn divide_follows_the_bins_and_the_median_halves() {
         else {
             continue;
         };
+        let (axis, pos, bins) = (axis as usize, pos as usize, bins as usize);
         let map = BinMap::new(&rg.cbounds);
         let bin = |p: &PrimRef| {
             let c = p.centroid();
@@ -564,4 +566,50 @@ fn a_closed_room_becomes_a_wide_node() {
         }
     }
     assert_eq!(leaf_items, prims.len(), "the room is one leaf");
+}
+
+/// `divide_small` (the wide node's search, on a copy) makes the sides
+/// `divide` makes, with the same bounds, on small ranges of every size
+/// and any bin plane.
+#[test]
+fn divide_small_makes_the_sides_of_divide() {
+    let b = builder();
+    let mut r = Rng::new(50);
+    let mut cuts = 0;
+    for trial in 0..300 {
+        let n = 2 + trial % (MAX_LEAF_ITEMS - 1);
+        let items = boxes((0..n).map(|_| r.v(0.0, 3.0)), Vec3::splat(0.2));
+        let rg = range(&items);
+        for axis in 0..3u8 {
+            for pos in 1..SMALL_BINS as u8 {
+                let plan = Plan::Bin {
+                    axis,
+                    pos,
+                    bins: SMALL_BINS as u8,
+                    wide: false,
+                };
+                let map = BinMap::new(&rg.cbounds);
+                let left = items
+                    .iter()
+                    .filter(|p| map.bins::<SMALL_BINS>(p.centroid())[axis as usize] < pos as usize)
+                    .count();
+                if left == 0 || left == n {
+                    continue;
+                }
+                let (mut x, mut y) = (items.clone(), items.clone());
+                let (xa, xb) = b.divide(&mut x, &rg, plan);
+                let (ya, yb) = Builder::divide_small(&mut y, &rg, plan);
+                let key = |r: &Range| (r.begin, r.end, r.bounds, r.cbounds);
+                assert_eq!((key(&xa), key(&xb)), (key(&ya), key(&yb)));
+                let ids = |v: &[PrimRef]| {
+                    let mut ids: Vec<u32> = v.iter().map(|p| p.id()).collect();
+                    ids.sort_unstable();
+                    ids
+                };
+                assert_eq!(ids(&x[..xa.end]), ids(&y[..ya.end]));
+                cuts += 1;
+            }
+        }
+    }
+    assert!(cuts > 1000, "{cuts}");
 }
