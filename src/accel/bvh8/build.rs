@@ -623,9 +623,9 @@ const SPECULATE_ITEMS: usize = 4 * 1024;
 /// lifted) the wide nodes cut leaf tests by 12-15% but the rays were no
 /// faster (within a few percent either way: each extra node level is
 /// another load on a tree far larger than the caches), while the tree
-/// took 8-11% more bytes and the build 40-50% longer (each small range's
+/// took 8-11% more bytes and the build 35-50% longer (each small range's
 /// node is first found on a copy). The scenes of a few items it is for,
-/// rooms and rows of spheres, rendered 3-8% faster.
+/// rooms and rows of spheres, rendered 2-10% faster.
 const WIDE_ITEMS: usize = 4096;
 
 struct Builder {
