@@ -1,6 +1,9 @@
 //! Building the 8-wide BVH: binned SAH splits, each node taking up to eight
 //! children by splitting its largest child again, then the leaves'
-//! triangles copied into four-wide blocks. With several threads, a large
+//! triangles copied into four-wide blocks. In small scenes a range of a
+//! leaf's size also weighs an 8-wide node (one node test, then its
+//! children's leaves) against the leaf, which the binary SAH cannot see
+//! for enclosing geometry such as a room's walls. With several threads, a large
 //! node's binary levels are divided ahead on all of them (`expand`), large
 //! ranges are binned and partitioned in parallel, and large nodes' children
 //! are built in parallel: the tree is the one-thread build's, node for node
@@ -153,13 +156,19 @@ impl Range {
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Plan {
     /// Items whose centroid falls below bin `pos` (of `bins`) of `axis` go left.
+    /// `wide`: a small range that the SAH gives an 8-wide node rather than
+    /// a leaf (see [`Builder::wide_cost`]), so that its halves, divided
+    /// within a node, go on dividing where that pays (see [`Part::split`]).
+    /// (Bytes, not words: ranges carry two plans, and the node loop moves
+    /// ranges about.)
     Bin {
-        axis: usize,
-        pos: usize,
-        bins: usize,
+        axis: u8,
+        pos: u8,
+        bins: u8,
+        wide: bool,
     },
     /// Equal halves along the centroids' longest axis.
-    Median { axis: usize },
+    Median { axis: u8 },
 }
 
 /// The built tree (see `Bvh8`).
@@ -204,6 +213,7 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
     }
     let builder = Builder {
         pad: Vec3::splat(margin(&bounds)),
+        wide: refs.len() <= WIDE_ITEMS,
     };
     let all = Range {
         begin: 0,
@@ -409,6 +419,22 @@ fn truncate<const B: usize>(k: Vec3A) -> [usize; 3] {
     ]
 }
 
+/// Whether a centroid goes left of bin `pos` (of `bins`) of `axis` in
+/// range `r`: the same arithmetic as `BinMap::bins`, on one axis, without
+/// the conversion: for `k ≥ 0` and `pos ≤ bins − 1`, `trunc(min(k, bins −
+/// 1)) < pos` exactly when `k < pos`. All three axes at once, the plan's
+/// picked from the mask.
+#[inline(always)]
+fn left_of(r: &Range, axis: u8, pos: u8, bins: u8) -> impl Fn(Vec3A) -> bool + Sync + Copy {
+    let (axis, pos, bins) = (axis as usize, pos as usize, bins as usize);
+    let map = BinMap::new(&r.cbounds);
+    let (min, scale) = (map.min[axis], map.scale[axis] * bins as f32);
+    let (min, scale) = (Vec3A::splat(min), Vec3A::splat(scale));
+    let pos = Vec3A::splat(pos as f32);
+    // NaN gives 0, as in `BinMap::bins`.
+    move |c: Vec3A| ((c - min) * scale).max(Vec3A::ZERO).cmplt(pos).bitmask() >> axis & 1 != 0
+}
+
 /// Bins for ranges of fewer than `SMALL_RANGE` items.
 const SMALL_BINS: usize = 8;
 /// See [`SMALL_BINS`].
@@ -512,12 +538,19 @@ fn forced(r: &Range, depth: usize) -> Option<Option<Plan>> {
     let axis = longest(ce);
     if ce[axis] <= 0.0 {
         // Coincident centroids: no plane separates them.
-        return Some((n > MAX_LEAF_ITEMS).then_some(Plan::Median { axis }));
+        return Some((n > MAX_LEAF_ITEMS).then_some(Plan::Median { axis: axis as u8 }));
     }
     if depth + levels_left(n) >= MAX_DEPTH {
-        return Some(Some(Plan::Median { axis }));
+        return Some(Some(Plan::Median { axis: axis as u8 }));
     }
     None
+}
+
+impl Plan {
+    /// Whether the plan makes a small range an 8-wide node rather than a leaf.
+    fn wide(self) -> bool {
+        matches!(self, Plan::Bin { wide: true, .. })
+    }
 }
 
 /// A range with its plan, made for node level `depth`, perhaps already
@@ -525,7 +558,17 @@ fn forced(r: &Range, depth: usize) -> Option<Option<Plan>> {
 /// [`Builder::expand`].
 struct Part {
     r: Range,
+    /// How the range divides as a subtree of its own (`None`: a leaf).
     plan: Option<Plan>,
+    /// How the node loop divides the range within the node it is a child
+    /// of (`None`: it stays one child). `plan`, except within a wide node
+    /// (the halves of a range with a wide plan, and theirs): there a
+    /// division costs no node test, so a range divides by its cheapest
+    /// plane when that pays within two levels ([`Builder::free_split`]);
+    /// the node loop takes the largest first while the node has slots.
+    split: Option<Plan>,
+    /// Whether the range is within a wide node (its halves are too).
+    wide: bool,
     depth: usize,
     halves: Option<Box<(Part, Part)>>,
 }
@@ -535,10 +578,36 @@ impl Part {
         Part {
             r,
             plan,
+            split: plan,
+            wide: false,
             depth,
             halves: None,
         }
     }
+
+    /// A range within a wide node, whose items are `items`.
+    fn within(b: &Builder, items: &[PrimRef], r: Range, plan: Option<Plan>, depth: usize) -> Self {
+        Part {
+            split: b.free_split(items, &r),
+            wide: true,
+            ..Part::new(r, plan, depth)
+        }
+    }
+}
+
+/// The child the node loop divides next: the largest by surface area of
+/// those that divide (the last of equals), given each child's range and
+/// whether it divides.
+fn next_to_split<'a>(kids: impl Iterator<Item = (&'a Range, bool)>) -> Option<usize> {
+    kids.enumerate()
+        .filter(|(_, (_, divides))| *divides)
+        .max_by(|x, y| {
+            x.1 .0
+                .bounds
+                .surface_area()
+                .total_cmp(&y.1 .0.bounds.surface_area())
+        })
+        .map(|(i, _)| i)
 }
 
 /// Binary levels of a node (1 + 2 + 4 = 7 divisions: its eight children
@@ -548,8 +617,21 @@ const SPECULATE_LEVELS: usize = 3;
 /// Ranges below this many items are not divided ahead of their turn.
 const SPECULATE_ITEMS: usize = 4 * 1024;
 
+/// Builds of up to this many items weigh a wide node against each small
+/// range's leaf (see [`Builder::wide_cost`]); larger ones (meshes) only
+/// the binary split. On meshes (bunny40k, sphere1m, with this limit
+/// lifted) the wide nodes cut leaf tests by 12-15% but the rays were no
+/// faster (within a few percent either way: each extra node level is
+/// another load on a tree far larger than the caches), while the tree
+/// took 8-11% more bytes and the build 35-50% longer (each small range's
+/// node is first found on a copy). The scenes of a few items it is for,
+/// rooms and rows of spheres, rendered 2-10% faster.
+const WIDE_ITEMS: usize = 4096;
+
 struct Builder {
     pad: Vec3,
+    /// Whether small ranges may become wide nodes ([`WIDE_ITEMS`]).
+    wide: bool,
 }
 
 impl Builder {
@@ -570,38 +652,182 @@ impl Builder {
         };
         let whole = r.bounds.surface_area();
         let split = SPLIT_COST * whole + best.0;
+        let bin = |wide| Plan::Bin {
+            axis: best.1 as u8,
+            pos: best.2 as u8,
+            bins: if n < SMALL_RANGE { SMALL_BINS } else { BINS } as u8,
+            wide,
+        };
         if n <= MAX_LEAF_ITEMS && whole * blocks(n) <= split {
-            return None;
+            // The binary SAH charges each binary level a node test and
+            // sees only two children: it cannot see that the items of a
+            // room (each plane leaves one side with the whole room's box)
+            // spread over an 8-wide node's children cost less than a leaf.
+            let wide = self.wide
+                && best.0.is_finite()
+                && self.wide_cost(items, r, bin(true)) < whole * blocks(n);
+            return wide.then(|| bin(true));
         }
         if !best.0.is_finite() {
-            return Some(Plan::Median { axis: longest(ce) });
+            return Some(Plan::Median {
+                axis: longest(ce) as u8,
+            });
         }
-        Some(Plan::Bin {
-            axis: best.1,
-            pos: best.2,
-            bins: if n < SMALL_RANGE { SMALL_BINS } else { BINS },
-        })
+        Some(bin(false))
+    }
+
+    /// The cheapest plane of a small range within a wide node (whose items
+    /// are `items`), if dividing by it lowers the range's `area × blocks`,
+    /// or dividing by it and then each half by its own cheapest plane does.
+    /// A division within a node adds no node test, only children. The
+    /// second level is needed for enclosing geometry: the items of a
+    /// room's walls in one range have the room's box, and peeling one wall
+    /// off leaves the rest with it and often the same blocks, so only the
+    /// next division pays. [`Builder::wide_cost`] then weighs the node's
+    /// children as they come out against the leaf.
+    fn free_split(&self, items: &[PrimRef], r: &Range) -> Option<Plan> {
+        let n = r.len();
+        debug_assert!(n <= MAX_LEAF_ITEMS);
+        if n < 2 {
+            return None;
+        }
+        // (own cost, cheapest plane's cost, its axis and bin)
+        let cost = |items: &[PrimRef], r: &Range| {
+            let own = r.bounds.surface_area() * blocks(r.len());
+            if r.len() < 2 {
+                return (own, own, 0, 0);
+            }
+            let (c, axis, pos) = serial_sweep::<SMALL_BINS>(items, &r.cbounds, r.cbounds.extent());
+            (own, c, axis, pos)
+        };
+        let (own, one, axis, pos) = cost(items, r);
+        if !one.is_finite() {
+            return None;
+        }
+        let plan = Plan::Bin {
+            axis: axis as u8,
+            pos: pos as u8,
+            bins: SMALL_BINS as u8,
+            wide: false,
+        };
+        if one < own {
+            return Some(plan);
+        }
+        let mut copy = [PrimRef::skipped(); MAX_LEAF_ITEMS];
+        let buf = &mut copy[..n];
+        buf.copy_from_slice(items);
+        let whole = Range {
+            begin: 0,
+            end: n,
+            ..*r
+        };
+        let (a, b) = Self::divide_small(buf, &whole, plan);
+        let two: f32 = [a, b]
+            .iter()
+            .map(|h| {
+                let (own, c, _, _) = cost(&buf[h.begin..h.end], h);
+                own.min(c)
+            })
+            .sum();
+        (two < own).then_some(plan)
+    }
+
+    /// The SAH cost of making the small range `r` (its items are `items`)
+    /// an 8-wide node whose first division is `first`: one node test
+    /// (`SPLIT_COST`, as a binary level is charged) plus its children's
+    /// `area × blocks`, the children being those the node loop makes
+    /// (within a wide node: [`Part::split`]), found here on a copy of the
+    /// items. The binary SAH charges a node test per binary level; a wide
+    /// node's up to three levels of divisions cost one.
+    fn wide_cost(&self, items: &[PrimRef], r: &Range, first: Plan) -> f32 {
+        let n = items.len();
+        debug_assert!(n <= MAX_LEAF_ITEMS && n == r.len());
+        let mut copy = [PrimRef::skipped(); MAX_LEAF_ITEMS];
+        let buf = &mut copy[..n];
+        buf.copy_from_slice(items);
+        let whole = Range {
+            begin: 0,
+            end: n,
+            ..*r
+        };
+        let mut kids = [(whole, None); W];
+        let (a, b) = Self::divide_small(buf, &whole, first);
+        kids[0] = (a, self.free_split(&buf[a.begin..a.end], &a));
+        kids[1] = (b, self.free_split(&buf[b.begin..b.end], &b));
+        let mut len = 2;
+        while len < W {
+            let Some(i) = next_to_split(kids[..len].iter().map(|(k, s)| (k, s.is_some()))) else {
+                break;
+            };
+            let (k, s) = kids[i];
+            let (a, b) = Self::divide_small(&mut buf[k.begin..k.end], &k, s.expect("divides"));
+            kids.copy_within(i + 1..len, i + 2);
+            kids[i] = (a, self.free_split(&buf[a.begin..a.end], &a));
+            kids[i + 1] = (b, self.free_split(&buf[b.begin..b.end], &b));
+            len += 1;
+        }
+        let leaves: f32 = kids[..len]
+            .iter()
+            .map(|(k, _)| k.bounds.surface_area() * blocks(k.len()))
+            .sum();
+        SPLIT_COST * r.bounds.surface_area() + leaves
+    }
+
+    /// Divides the copy `buf` of a small range `r` by the bin plan `plan`,
+    /// for [`Builder::wide_cost`] and [`Builder::free_split`]: the sides of
+    /// [`Builder::divide`], with their bounds, the order within each side
+    /// perhaps another (no cost depends on it). Not `divide` itself: a
+    /// third caller changed how the compiler inlined it and its partition
+    /// into the large builds' path (5% more instructions building a 64k
+    /// mesh).
+    fn divide_small(buf: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
+        let Plan::Bin {
+            axis, pos, bins, ..
+        } = plan
+        else {
+            unreachable!("small ranges divide by bins")
+        };
+        let left = left_of(r, axis, pos, bins);
+        let mut out = [PrimRef::skipped(); MAX_LEAF_ITEMS];
+        let (mut l, mut rt) = (0, buf.len());
+        for p in buf.iter() {
+            if left(p.centroid()) {
+                out[l] = *p;
+                l += 1;
+            } else {
+                rt -= 1;
+                out[rt] = *p;
+            }
+        }
+        buf.copy_from_slice(&out[..buf.len()]);
+        debug_assert!(l > 0 && l < buf.len());
+        let ((lb, lc), (rb, rc)) = (bounds_of(&buf[..l]), bounds_of(&buf[l..]));
+        let m = r.begin + l;
+        (
+            Range {
+                begin: r.begin,
+                end: m,
+                bounds: lb,
+                cbounds: lc,
+            },
+            Range {
+                begin: m,
+                end: r.end,
+                bounds: rb,
+                cbounds: rc,
+            },
+        )
     }
 
     /// Divides `r` (its items are `refs`, which starts at `r.begin`) by
     /// `plan` into two non-empty ranges with their bounds.
     fn divide(&self, refs: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
         let (mid, (lb, lc), (rb, rc)) = match plan {
-            Plan::Bin { axis, pos, bins } => {
-                let map = BinMap::new(&r.cbounds);
-                let (min, scale) = (map.min[axis], map.scale[axis] * bins as f32);
-                // The same arithmetic as `BinMap::bins`, on one axis, without
-                // the conversion: for `k ≥ 0` and `pos ≤ bins − 1`,
-                // `trunc(min(k, bins − 1)) < pos` exactly when `k < pos`.
-                // All three axes at once, the plan's picked from the mask.
-                let (min, scale) = (Vec3A::splat(min), Vec3A::splat(scale));
-                let pos = Vec3A::splat(pos as f32);
-                partition(refs, |c| {
-                    // NaN gives 0, as in `BinMap::bins`.
-                    ((c - min) * scale).max(Vec3A::ZERO).cmplt(pos).bitmask() >> axis & 1 != 0
-                })
-            }
+            Plan::Bin {
+                axis, pos, bins, ..
+            } => partition(refs, left_of(r, axis, pos, bins)),
             Plan::Median { axis } => {
+                let axis = axis as usize;
                 let mid = refs.len() / 2;
                 refs.select_nth_unstable_by(mid, |a, b| {
                     a.centroid()[axis].total_cmp(&b.centroid()[axis])
@@ -659,14 +885,34 @@ impl Builder {
     /// plans are the same at `depth`, because `expand` only divides ranges
     /// far enough from `MAX_DEPTH` that the median is not forced on them or
     /// their halves any sooner (see [`forced`]).
-    fn halves(&self, items: &mut [PrimRef], p: Part, depth: usize) -> (Part, Part) {
+    ///
+    /// `root`: `p` is the node's own range, divided by its `plan` (else a
+    /// child divided within the node, by its `split`). The halves are
+    /// within a wide node when the plan that divides `p` is wide or `p`
+    /// itself is within one (not past the node: a root's halves are
+    /// within a wide node only by its own plan).
+    fn halves(&self, items: &mut [PrimRef], p: Part, depth: usize, root: bool) -> (Part, Part) {
+        let by = if root { p.plan } else { p.split };
+        let by = by.expect("a range that divides");
+        let wide = by.wide() || (p.wide && !root);
         let (mut a, mut b) = match p.halves {
-            Some(h) => *h,
+            Some(h) => {
+                // Only large ranges are divided ahead, never wide ones.
+                debug_assert!(!wide && by == p.plan.expect("divided by its plan"));
+                *h
+            }
             None => {
-                let plan = p.plan.expect("a range with a plan");
-                let (a, b) = self.divide(items, &p.r, plan);
+                let (a, b) = self.divide(items, &p.r, by);
                 let (pa, pb) = self.plans(items, &a, &b, depth);
-                (Part::new(a, pa, depth), Part::new(b, pb, depth))
+                if wide {
+                    let (ia, ib) = items.split_at(a.len());
+                    (
+                        Part::within(self, ia, a, pa, depth),
+                        Part::within(self, ib, b, pb, depth),
+                    )
+                } else {
+                    (Part::new(a, pa, depth), Part::new(b, pb, depth))
+                }
             }
         };
         for h in [&mut a, &mut b] {
@@ -747,26 +993,20 @@ impl Builder {
         // Up to W children: split the largest child that wants splitting.
         // (On the stack: a vector here was an allocation per node.)
         let mut all: [Option<Part>; W] = Default::default();
-        let (a, b) = self.halves(refs, part, depth + 1);
+        let (a, b) = self.halves(refs, part, depth + 1, true);
         (all[0], all[1]) = (Some(a), Some(b));
         let mut len = 2;
         while len < W {
-            let pick = all[..len]
-                .iter()
-                .map(|k| k.as_ref().expect("filled"))
-                .enumerate()
-                .filter(|(_, k)| k.plan.is_some())
-                .max_by(|x, y| {
-                    x.1.r
-                        .bounds
-                        .surface_area()
-                        .total_cmp(&y.1.r.bounds.surface_area())
-                })
-                .map(|(i, _)| i);
+            let pick = next_to_split(
+                all[..len]
+                    .iter()
+                    .map(|k| k.as_ref().expect("filled"))
+                    .map(|k| (&k.r, k.split.is_some())),
+            );
             let Some(i) = pick else { break };
             let k = all[i].take().expect("filled");
             let kr = k.r;
-            let (a, b) = self.halves(refs_of(refs, &r, &kr), k, depth + 1);
+            let (a, b) = self.halves(refs_of(refs, &r, &kr), k, depth + 1, false);
             // `a` and `b` take `k`'s place, in order.
             for j in (i + 1..len).rev() {
                 all[j + 1] = all[j].take();

@@ -13,6 +13,14 @@ fn refs(n: usize, seed: u64) -> Vec<PrimRef> {
         .collect()
 }
 
+/// A builder with wide nodes for small ranges (as for small scenes).
+fn builder() -> Builder {
+    Builder {
+        pad: Vec3::ZERO,
+        wide: true,
+    }
+}
+
 /// A range over all of `items`.
 fn range(items: &[PrimRef]) -> Range {
     let (bounds, cbounds) = bounds_of(items);
@@ -68,7 +76,7 @@ fn references_keep_ids_and_kinds_in_plain_floats() {
 /// larger ones `BINS`; one axis is flat in a quarter of the trials.
 #[test]
 fn the_plan_takes_the_cheapest_bin_plane() {
-    let b = Builder { pad: Vec3::ZERO };
+    let b = builder();
     let mut r = Rng::new(41);
     let mut splits = 0;
     for trial in 0..240 {
@@ -80,9 +88,13 @@ fn the_plan_takes_the_cheapest_bin_plane() {
         let centres: Vec<Vec3> = (0..n).map(|_| r.v(0.0, 1.0) * spread).collect();
         let items = boxes(centres, Vec3::splat(0.2));
         let rg = range(&items);
-        let Some(Plan::Bin { axis, pos, bins }) = b.plan(&items, &rg, 0) else {
+        let Some(Plan::Bin {
+            axis, pos, bins, ..
+        }) = b.plan(&items, &rg, 0)
+        else {
             continue;
         };
+        let (axis, pos, bins) = (axis as usize, pos as usize, bins as usize);
         assert_eq!(bins, if n < SMALL_RANGE { SMALL_BINS } else { BINS });
         let map = BinMap::new(&rg.cbounds);
         let bin = |p: &PrimRef, a: usize| {
@@ -114,7 +126,7 @@ fn the_plan_takes_the_cheapest_bin_plane() {
 /// 7/2 + 2 = 5 levels left).
 #[test]
 fn the_plan_stops_at_leaves_and_falls_back_to_the_median() {
-    let b = Builder { pad: Vec3::ZERO };
+    let b = builder();
     let plan = |items: &[PrimRef], depth| b.plan(items, &range(items), depth);
     let pile = |n: usize| boxes(vec![Vec3::ONE; n], Vec3::splat(0.5));
     assert!(plan(
@@ -155,7 +167,7 @@ fn the_plan_stops_at_leaves_and_falls_back_to_the_median() {
         let items = boxes((0..100).map(|_| r.v(0.0, 1.0) * spread), Vec3::splat(0.1));
         let deep = MAX_DEPTH - 5;
         assert!(
-            matches!(plan(&items, deep), Some(Plan::Median { axis: a }) if a == axis),
+            matches!(plan(&items, deep), Some(Plan::Median { axis: a }) if a as usize == axis),
             "axis {axis}"
         );
         assert!(matches!(plan(&items, deep - 1), Some(Plan::Bin { .. })));
@@ -167,16 +179,22 @@ fn the_plan_stops_at_leaves_and_falls_back_to_the_median() {
 /// returns each side's bounds; the median halves a range.
 #[test]
 fn divide_follows_the_bins_and_the_median_halves() {
-    let b = Builder { pad: Vec3::ZERO };
+    let b = builder();
     let mut r = Rng::new(43);
     let mut cuts = 0;
     for trial in 0..60 {
         let n = 9 + 2 * trial;
         let mut items = boxes((0..n).map(|_| r.v(0.0, 4.0)), Vec3::splat(0.1));
         let rg = range(&items);
-        let Some(plan @ Plan::Bin { axis, pos, bins }) = b.plan(&items, &rg, 0) else {
+        let Some(
+            plan @ Plan::Bin {
+                axis, pos, bins, ..
+            },
+        ) = b.plan(&items, &rg, 0)
+        else {
             continue;
         };
+        let (axis, pos, bins) = (axis as usize, pos as usize, bins as usize);
         let map = BinMap::new(&rg.cbounds);
         let bin = |p: &PrimRef| {
             let c = p.centroid();
@@ -217,6 +235,7 @@ fn divide_follows_the_bins_and_the_median_halves() {
         axis: 0,
         pos: 4,
         bins: 8,
+        wide: false,
     };
     let (left, _) = b.divide(&mut items, &rg, plan);
     assert_eq!(left.end, 2);
@@ -241,7 +260,7 @@ fn divide_follows_the_bins_and_the_median_halves() {
 /// the builder updates the table.
 #[test]
 fn a_chain_started_at_any_level_ends_where_it_was_measured() {
-    let b = Builder { pad: Vec3::ZERO };
+    let b = builder();
     // The chain runs on in a node's first child, and mirrored in its
     // second.
     let measured = [
@@ -273,7 +292,7 @@ fn a_chain_started_at_any_level_ends_where_it_was_measured() {
 /// builds the one-thread build's nodes, in the same order.
 #[test]
 fn the_parallel_path_plans_for_the_same_levels() {
-    let b = Builder { pad: Vec3::ZERO };
+    let b = builder();
     let mut r = Rng::new(44);
     let centres: Vec<Vec3> = (0..PARALLEL_ITEMS + 4000)
         .map(|_| r.v(0.0, 100.0))
@@ -426,7 +445,7 @@ fn the_parallel_partition_permutes_as_the_serial_one() {
 /// every plan is the bins' and where the median takes over sooner.
 #[test]
 fn dividing_ahead_builds_the_serial_tree() {
-    let b = Builder { pad: Vec3::ZERO };
+    let b = builder();
     let mut r = Rng::new(48);
     let mut centres: Vec<Vec3> = (0..150_000).map(|_| r.v(0.0, 100.0)).collect();
     for _ in 0..40 {
@@ -464,4 +483,133 @@ fn dividing_ahead_builds_the_serial_tree() {
             "3 threads built another tree (from level {start})"
         );
     }
+}
+
+/// A closed room: a cube of 12 triangles with two spheres inside. Every
+/// plane leaves one side with the whole room's box, so the binary SAH
+/// alone keeps one leaf of all 14 items, which every ray tests whole. A
+/// wide node is cheaper by the SAH: the root gets several children (the
+/// walls apart), rays from inside (as a camera's, bounces' and shadow
+/// rays are) test less than half the items, and hits are brute force's.
+/// A build of more than `WIDE_ITEMS` items keeps the binary SAH's leaf.
+#[test]
+fn a_closed_room_becomes_a_wide_node() {
+    use crate::accel::bvh8::Bvh8;
+    use crate::accel::testutil::{assert_agrees, prim, sphere};
+    use crate::accel::{Aggregate, Query};
+    use crate::math::Ray;
+    use crate::shape::{Shape, Triangle};
+    use crate::stats::Counters;
+    // The cube [-1, 1]³, two triangles a face.
+    let mut prims = Vec::new();
+    for axis in 0..3 {
+        for side in [-1.0f32, 1.0] {
+            let corner = |u: f32, v: f32| {
+                let mut p = Vec3::ZERO;
+                p[axis] = side;
+                p[(axis + 1) % 3] = u;
+                p[(axis + 2) % 3] = v;
+                p
+            };
+            let (a, b, c, d) = (
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(1.0, 1.0),
+                corner(-1.0, 1.0),
+            );
+            prims.push(prim(Shape::Triangle(Triangle::new(a, b, c))));
+            prims.push(prim(Shape::Triangle(Triangle::new(a, c, d))));
+        }
+    }
+    prims.push(sphere(Vec3::new(-0.5, -0.7, 0.2), 0.3));
+    prims.push(sphere(Vec3::new(0.4, -0.6, -0.3), 0.4));
+    let ids: Vec<u32> = (0..prims.len() as u32).collect();
+    let b = Bvh8::new(&prims, ids.clone());
+    let kids = |b: &Bvh8| b.nodes[0].child.iter().filter(|&&c| c != EMPTY).count();
+    assert!(kids(&b) >= 4, "{} children", kids(&b));
+    let mut r = Rng::new(49);
+    let mut c = Counters::default();
+    let rays = 2000;
+    for _ in 0..rays {
+        let o = r.v(-0.95, 0.95);
+        let d = (r.v(-1.0, 1.0) + Vec3::splat(1e-3)).normalize();
+        let ray = Ray::new(o, d);
+        let hit = b.intersect(Query::new(&prims, &ray, 0.0, f32::INFINITY), &mut c);
+        assert!(hit.is_some(), "a ray from inside leaves the room");
+    }
+    let tests = c.intersection_tests as f64 / rays as f64;
+    assert!(tests < prims.len() as f64 / 2.0, "{tests} tests a ray");
+    assert_agrees(&b, &prims, 2000);
+    // A large build: the same room among many far-away specks, whose
+    // room range stays one leaf.
+    let mut many = prims.clone();
+    for k in 0..WIDE_ITEMS {
+        many.push(sphere(Vec3::new(100.0 + k as f32, 0.0, 0.0), 0.01));
+    }
+    let big = Bvh8::new(&many, (0..many.len() as u32).collect());
+    let mut leaf_items = 0;
+    for n in &big.nodes {
+        for &ch in &n.child {
+            if ch != EMPTY && is_leaf(ch) {
+                let (start, count) = leaf_range(ch);
+                let holds_wall = big.tris[start..start + count]
+                    .iter()
+                    .any(|t| t.ids.contains(&0));
+                if holds_wall {
+                    leaf_items = big.tris[start..start + count]
+                        .iter()
+                        .flat_map(|t| t.ids)
+                        .filter(|&id| id != super::super::node::NO_ITEM)
+                        .count();
+                }
+            }
+        }
+    }
+    assert_eq!(leaf_items, prims.len(), "the room is one leaf");
+}
+
+/// `divide_small` (the wide node's search, on a copy) makes the sides
+/// `divide` makes, with the same bounds, on small ranges of every size
+/// and any bin plane.
+#[test]
+fn divide_small_makes_the_sides_of_divide() {
+    let b = builder();
+    let mut r = Rng::new(50);
+    let mut cuts = 0;
+    for trial in 0..300 {
+        let n = 2 + trial % (MAX_LEAF_ITEMS - 1);
+        let items = boxes((0..n).map(|_| r.v(0.0, 3.0)), Vec3::splat(0.2));
+        let rg = range(&items);
+        for axis in 0..3u8 {
+            for pos in 1..SMALL_BINS as u8 {
+                let plan = Plan::Bin {
+                    axis,
+                    pos,
+                    bins: SMALL_BINS as u8,
+                    wide: false,
+                };
+                let map = BinMap::new(&rg.cbounds);
+                let left = items
+                    .iter()
+                    .filter(|p| map.bins::<SMALL_BINS>(p.centroid())[axis as usize] < pos as usize)
+                    .count();
+                if left == 0 || left == n {
+                    continue;
+                }
+                let (mut x, mut y) = (items.clone(), items.clone());
+                let (xa, xb) = b.divide(&mut x, &rg, plan);
+                let (ya, yb) = Builder::divide_small(&mut y, &rg, plan);
+                let key = |r: &Range| (r.begin, r.end, r.bounds, r.cbounds);
+                assert_eq!((key(&xa), key(&xb)), (key(&ya), key(&yb)));
+                let ids = |v: &[PrimRef]| {
+                    let mut ids: Vec<u32> = v.iter().map(|p| p.id()).collect();
+                    ids.sort_unstable();
+                    ids
+                };
+                assert_eq!(ids(&x[..xa.end]), ids(&y[..ya.end]));
+                cuts += 1;
+            }
+        }
+    }
+    assert!(cuts > 1000, "{cuts}");
 }
