@@ -32,35 +32,146 @@ pub fn radiance(shape: &RenderAreaShape, color: Vec3, power: f32) -> Vec3 {
 /// already divided by the sample's density (`radiance · cos θ_light · A / d²`
 /// for area sampling, `radiance · Ω` for cone sampling).
 pub fn sample(shape: &RenderAreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Incident {
-    match *shape {
-        AreaShape::Quad {
-            corner,
-            edge1,
-            edge2,
-        } => {
-            let (at, area) = quad_point(corner, edge1, edge2, u);
-            from_area_point(p, at, area, radiance)
-        }
-        AreaShape::Disk {
-            center,
-            normal,
-            radius,
-        } => {
-            let n = normal.normalize_or_zero();
-            let at = disk_point(center, n, radius, u);
-            from_area_point(p, at, PI * radius * radius, radiance)
-        }
-        AreaShape::Sphere { center, radius } => match sphere_cone(center, radius, p, u) {
-            None => Incident::NONE, // inside the light: it lights nothing here
-            Some(cone) => {
-                let solid_angle = TAU * (1.0 - cone.cos_max);
-                Incident {
-                    to_light: cone.w,
-                    color: radiance * solid_angle,
-                    at: Some(cone.at),
+    Prepared::new(shape, radiance, p).sample(u)
+}
+
+/// [`sample`] for one light and one point `p`, with what every sample of
+/// that pair shares worked out once: a quad's normal and area, a disk's
+/// frame, a sphere's cone (its axis, frame and solid angle). A shaded point
+/// sends several shadow rays to an area light; each sample is then the
+/// per-sample work alone. Every sample equals [`sample`]'s bit for bit (it
+/// is [`sample`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Prepared {
+    /// A parallelogram: corner, edges, unit normal and (one-sided) area.
+    Quad {
+        /// `corner + s·edge1 + t·edge2`, `(s, t) ∈ [0, 1)²`.
+        corner: Vec3,
+        /// First edge.
+        edge1: Vec3,
+        /// Second edge.
+        edge2: Vec3,
+        /// Unit normal `edge1 × edge2`.
+        n: Vec3,
+        /// One face's area.
+        area: f32,
+        /// The light's radiance.
+        radiance: Vec3,
+        /// The lit point.
+        p: Vec3,
+    },
+    /// A disk: centre, unit normal, frame in its plane, radius.
+    Disk {
+        /// Centre.
+        center: Vec3,
+        /// Unit normal.
+        n: Vec3,
+        /// Orthonormal pair spanning the disk's plane.
+        frame: (Vec3, Vec3),
+        /// Radius.
+        radius: f32,
+        /// The light's radiance.
+        radiance: Vec3,
+        /// The lit point.
+        p: Vec3,
+    },
+    /// A sphere seen from outside: its cone from `p`, and the light each
+    /// sample carries (`radiance · Ω`, the same for all).
+    Sphere {
+        /// The cone.
+        cone: Cone,
+        /// `radiance · Ω`.
+        color: Vec3,
+    },
+    /// `p` inside a sphere light: it lights nothing there.
+    Nothing,
+}
+
+impl Prepared {
+    /// What samples of `shape` (of `radiance`) seen from `p` share.
+    // Always inlined (and `sample`, and the cone's): out of line, the
+    // prepared light came back through memory, a store-forwarding stall.
+    #[inline(always)]
+    pub fn new(shape: &RenderAreaShape, radiance: Vec3, p: Vec3) -> Self {
+        match *shape {
+            AreaShape::Quad {
+                corner,
+                edge1,
+                edge2,
+            } => {
+                let (n, area) = quad_frame(edge1, edge2);
+                Prepared::Quad {
+                    corner,
+                    edge1,
+                    edge2,
+                    n,
+                    area,
+                    radiance,
+                    p,
                 }
             }
-        },
+            AreaShape::Disk {
+                center,
+                normal,
+                radius,
+            } => {
+                let n = normal.normalize_or_zero();
+                Prepared::Disk {
+                    center,
+                    n,
+                    frame: n.any_orthonormal_pair(),
+                    radius,
+                    radiance,
+                    p,
+                }
+            }
+            AreaShape::Sphere { center, radius } => match Cone::new(center, radius, p) {
+                None => Prepared::Nothing,
+                Some(cone) => {
+                    let solid_angle = TAU * (1.0 - cone.cos_max);
+                    Prepared::Sphere {
+                        cone,
+                        color: radiance * solid_angle,
+                    }
+                }
+            },
+        }
+    }
+
+    /// The sample `u ∈ [0,1)²`: what [`sample`] returns for it.
+    #[inline(always)]
+    pub fn sample(&self, u: Vec2) -> Incident {
+        match *self {
+            Prepared::Quad {
+                corner,
+                edge1,
+                edge2,
+                n,
+                area,
+                radiance,
+                p,
+            } => from_area_point(p, quad_at(corner, edge1, edge2, n, u), area, radiance),
+            Prepared::Disk {
+                center,
+                n,
+                frame,
+                radius,
+                radiance,
+                p,
+            } => {
+                let at = disk_at(center, n, frame, radius, u);
+                from_area_point(p, at, PI * radius * radius, radiance)
+            }
+            Prepared::Sphere { cone, color } => {
+                let s = cone.sample(u);
+                Incident {
+                    to_light: s.w,
+                    color,
+                    at: Some(s.at),
+                }
+            }
+            Prepared::Nothing => Incident::NONE,
+        }
     }
 }
 
@@ -69,21 +180,38 @@ pub fn sample(shape: &RenderAreaShape, radiance: Vec3, p: Vec3, u: Vec2) -> Inci
 /// the parallelogram's (one-sided) area.
 #[inline]
 pub(super) fn quad_point(corner: Vec3, edge1: Vec3, edge2: Vec3, u: Vec2) -> (SurfacePoint, f32) {
+    let (n, area) = quad_frame(edge1, edge2);
+    (quad_at(corner, edge1, edge2, n, u), area)
+}
+
+/// A parallelogram's unit normal `edge1 × edge2` and (one-sided) area.
+#[inline]
+fn quad_frame(edge1: Vec3, edge2: Vec3) -> (Vec3, f32) {
     let n = edge1.cross(edge2);
     let area = n.length();
+    (n / area.max(f32::MIN_POSITIVE), area)
+}
+
+/// [`quad_point`]'s point, given the unit normal.
+#[inline]
+fn quad_at(corner: Vec3, edge1: Vec3, edge2: Vec3, n: Vec3, u: Vec2) -> SurfacePoint {
     let (a, b) = (u.x * edge1, u.y * edge2);
     let y = corner + a + b;
     // Two products and two sums per coordinate.
     let error = gamma(4) * (corner.abs() + a.abs() + b.abs());
-    let n = n / area.max(f32::MIN_POSITIVE);
-    (SurfacePoint { p: y, error, n }, area)
+    SurfacePoint { p: y, error, n }
 }
 
 /// The point of the disk around `center` with unit normal `n` chosen by
 /// `u` (uniform over its area), with its error bound.
 #[inline]
 pub(super) fn disk_point(center: Vec3, n: Vec3, radius: f32, u: Vec2) -> SurfacePoint {
-    let (t1, t2) = n.any_orthonormal_pair();
+    disk_at(center, n, n.any_orthonormal_pair(), radius, u)
+}
+
+/// [`disk_point`], given the frame `n.any_orthonormal_pair()`.
+#[inline]
+fn disk_at(center: Vec3, n: Vec3, (t1, t2): (Vec3, Vec3), radius: f32, u: Vec2) -> SurfacePoint {
     let d = concentric_disk(u) * radius;
     let (a, b) = (d.x * t1, d.y * t2);
     let y = center + a + b;
@@ -141,40 +269,92 @@ pub(super) struct ConeSample {
 /// all. `None` when `p` is inside the sphere.
 #[inline]
 pub(super) fn sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> Option<ConeSample> {
-    let to_c = c - p;
-    let d2 = to_c.length_squared();
-    if d2 <= r * r {
-        return None;
+    Some(Cone::new(c, r, p)?.sample(u))
+}
+
+/// The cone a sphere subtends from a point outside it: what every sample
+/// of [`sphere_cone`] from that point shares.
+#[derive(Clone, Copy, Debug)]
+pub struct Cone {
+    c: Vec3,
+    r: f32,
+    p: Vec3,
+    to_c: Vec3,
+    d2: f32,
+    axis: Vec3,
+    frame: (Vec3, Vec3),
+    /// Cosine of the cone's half-angle.
+    pub cos_max: f32,
+    /// `sin²` of the half-angle, `r²/d²`.
+    pub sin2_max: f32,
+}
+
+impl Cone {
+    /// The cone of the sphere (`c`, `r`) from `p`; `None` from inside.
+    #[inline(always)]
+    pub fn new(c: Vec3, r: f32, p: Vec3) -> Option<Self> {
+        let to_c = c - p;
+        let d2 = to_c.length_squared();
+        if d2 <= r * r {
+            return None;
+        }
+        let d = d2.sqrt();
+        let axis = to_c / d;
+        let sin2_max = r * r / d2;
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        Some(Self {
+            c,
+            r,
+            p,
+            to_c,
+            d2,
+            axis,
+            frame: axis.any_orthonormal_pair(),
+            cos_max,
+            sin2_max,
+        })
     }
-    let d = d2.sqrt();
-    let axis = to_c / d;
-    let sin2_max = r * r / d2;
-    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-    let cos_t = 1.0 - u.x * (1.0 - cos_max);
-    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-    let phi = TAU * u.y;
-    let (t1, t2) = axis.any_orthonormal_pair();
-    let w = (t1 * phi.cos() + t2 * phi.sin()) * sin_t + axis * cos_t;
-    // Nearest intersection with the sphere along w (it exists up to rounding).
-    let b = w.dot(to_c);
-    let disc = (r * r - (d2 - b * b)).max(0.0);
-    let t = b - disc.sqrt();
-    // The point re-projected onto the sphere (pbrt bounds its object-space
-    // version by `|y|`; here the centre is not at the origin).
-    let y = p + w * t;
-    let n = (y - c).normalize_or_zero();
-    let rn = r * n;
-    let y = c + rn;
-    // Off the exact sphere by `r` times the rounding of `n`'s length and by
-    // the rounding of the sum: bounded by the terms' sizes, not by `|y|`,
-    // which is small where the centre and the offset cancel.
-    let error = gamma(5) * (c.abs() + rn.abs());
-    Some(ConeSample {
-        w,
-        at: SurfacePoint { p: y, error, n },
-        cos_max,
-        sin2_max,
-    })
+
+    /// The direction `u` picks, uniform in the cone, and where it meets
+    /// the sphere.
+    #[inline(always)]
+    pub(super) fn sample(&self, u: Vec2) -> ConeSample {
+        let Self {
+            c,
+            r,
+            p,
+            to_c,
+            d2,
+            axis,
+            frame: (t1, t2),
+            cos_max,
+            sin2_max,
+        } = *self;
+        let cos_t = 1.0 - u.x * (1.0 - cos_max);
+        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+        let phi = TAU * u.y;
+        let w = (t1 * phi.cos() + t2 * phi.sin()) * sin_t + axis * cos_t;
+        // Nearest intersection with the sphere along w (it exists up to rounding).
+        let b = w.dot(to_c);
+        let disc = (r * r - (d2 - b * b)).max(0.0);
+        let t = b - disc.sqrt();
+        // The point re-projected onto the sphere (pbrt bounds its object-space
+        // version by `|y|`; here the centre is not at the origin).
+        let y = p + w * t;
+        let n = (y - c).normalize_or_zero();
+        let rn = r * n;
+        let y = c + rn;
+        // Off the exact sphere by `r` times the rounding of `n`'s length and by
+        // the rounding of the sum: bounded by the terms' sizes, not by `|y|`,
+        // which is small where the centre and the offset cancel.
+        let error = gamma(5) * (c.abs() + rn.abs());
+        ConeSample {
+            w,
+            at: SurfacePoint { p: y, error, n },
+            cos_max,
+            sin2_max,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -42,6 +42,24 @@ pub fn is_delta(light: &RenderLight) -> bool {
     !matches!(light, Light::Area { .. })
 }
 
+/// What samples of the area light `light` seen from `p` share
+/// ([`area::Prepared`]); `None` for point and directional lights.
+#[inline(always)]
+pub fn prepare_area(light: &RenderLight, p: Vec3) -> Option<area::Prepared> {
+    match light {
+        Light::Area {
+            shape,
+            color,
+            power,
+        } => Some(area::Prepared::new(
+            shape,
+            area::radiance(shape, *color, *power),
+            p,
+        )),
+        _ => None,
+    }
+}
+
 /// What `light` sends to point `p` through the light point chosen by `u`
 /// (ignored by point and directional lights), divided by the density of
 /// that choice: the mean over stratified `u` is the light's contribution.

@@ -157,6 +157,13 @@ impl Sampler {
     /// [`prefix`](Self::prefix)) and index.
     #[inline]
     fn value_2d(&self, prefix: u64, index: u32, dim: u32) -> Vec2 {
+        self.value_2d_keyed(prefix, DimKey::new(prefix, dim), index, dim)
+    }
+
+    /// [`value_2d`](Self::value_2d) with the dimension's hash worked out
+    /// ahead ([`DimKey`]): the `n` values of a split dimension share it.
+    #[inline]
+    fn value_2d_keyed(&self, prefix: u64, key: DimKey, index: u32, dim: u32) -> Vec2 {
         // A key stream (index u32::MAX) is not part of any stratified set.
         let kind = if index == u32::MAX {
             SamplerKind::Random
@@ -168,7 +175,7 @@ impl Sampler {
         if let (SamplerKind::Uniform(layout), 0) = (kind, dim) {
             return self.grid_point(layout, index % self.spp);
         }
-        let h = hash_from(prefix, &[dim as u64]);
+        let h = key.h;
         match kind {
             SamplerKind::Random => Vec2::new(
                 unit_f32(hash(&[h, index as u64, 0])),
@@ -196,12 +203,11 @@ impl Sampler {
                 // pairing of pixel and lens positions is random, and so is
                 // the coverage of a defocused edge.
                 let h0 = hash_from(prefix, &[0]);
-                let (x, y) =
-                    sobol::point_2d_upper(index, h0 as u32, (h >> 32) as u32, mix64(h) as u32);
+                let (x, y) = sobol::point_2d_upper(index, h0 as u32, (h >> 32) as u32, key.mixed);
                 Vec2::new(hash::unit_from_u32(x), hash::unit_from_u32(y))
             }
             SamplerKind::Sobol => {
-                let (x, y) = sobol::point_2d(index, h as u32, (h >> 32) as u32, mix64(h) as u32);
+                let (x, y) = sobol::point_2d(index, h as u32, (h >> 32) as u32, key.mixed);
                 Vec2::new(hash::unit_from_u32(x), hash::unit_from_u32(y))
             }
         }
@@ -364,6 +370,26 @@ impl fmt::Display for SamplerKind {
             SamplerKind::Jittered => "jittered",
             SamplerKind::Sobol => "sobol",
         })
+    }
+}
+
+/// The hash of one dimension of one pixel's stream, and the Sobol
+/// scramble seed derived from it: what every value of the dimension uses.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DimKey {
+    h: u64,
+    mixed: u32,
+}
+
+impl DimKey {
+    /// Dimension `dim` under the stream's `prefix`.
+    #[inline]
+    pub(crate) fn new(prefix: u64, dim: u32) -> Self {
+        let h = hash_from(prefix, &[dim as u64]);
+        Self {
+            h,
+            mixed: mix64(h) as u32,
+        }
     }
 }
 

@@ -9,7 +9,7 @@
 //! are stratified together: splitting and supersampling give the same
 //! quality per ray, as the lecture's cost formula assumes.
 
-use super::{GridLayout, SampleStream, Sampler, SamplerKind};
+use super::{DimKey, GridLayout, SampleStream, Sampler, SamplerKind};
 use crate::math::Vec2;
 
 /// The `n` values of one split dimension; see [`SampleStream::split_2d`].
@@ -18,6 +18,8 @@ pub struct Split2d {
     sampler: Sampler,
     /// The hash prefix of the seed and the (possibly re-keyed) pixel.
     prefix: u64,
+    /// The dimension's hash, shared by its `n` values.
+    key: DimKey,
     base: u32,
     dim: u32,
     k: u32,
@@ -52,8 +54,10 @@ impl SampleStream<'_> {
             self.pixel_key
         };
         let sampler = Sampler::new(kind, s.spp.saturating_mul(n), s.seed);
+        let prefix = sampler.prefix(key);
         Split2d {
-            prefix: sampler.prefix(key),
+            prefix,
+            key: DimKey::new(prefix, dim),
             sampler,
             base,
             dim,
@@ -72,7 +76,7 @@ impl Iterator for Split2d {
         }
         let v = self
             .sampler
-            .value_2d(self.prefix, self.base + self.k, self.dim);
+            .value_2d_keyed(self.prefix, self.key, self.base + self.k, self.dim);
         self.k += 1;
         Some(v)
     }
