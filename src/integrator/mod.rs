@@ -13,7 +13,7 @@ mod whitted;
 pub use ao::{AmbientOcclusion, AoSettings};
 pub use kind::IntegratorKind;
 pub use observer::{Branch, NoObserver, RayKind, RayObserver, RayRecorder, RecordedRay};
-pub use path::{LightChoice, PathSettings, PathTracer, Strategy};
+pub use path::{CausticPaths, LightChoice, PathSettings, PathTracer, Strategy};
 pub use whitted::Whitted;
 
 use crate::math::{Ray, Vec3};

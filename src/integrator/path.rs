@@ -87,6 +87,24 @@ pub enum LightChoice {
     Uniform,
 }
 
+/// Which caustic paths the image keeps: light that reaches a non-delta
+/// scattering vertex through one or more delta lobes (mirror, glass) from
+/// an emitter or the environment, which only BSDF sampling finds. All of
+/// them (the default, unbiased); the others drop some, for measuring how
+/// much of the noise they carry (docs/path-tracing.md), and lose their
+/// light (biased).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CausticPaths {
+    /// Every path.
+    #[default]
+    Keep,
+    /// Without the caustics seen directly: those whose non-delta vertex
+    /// is the camera ray's hit.
+    DropSeen,
+    /// Without any caustic path, at any depth.
+    DropAll,
+}
+
 /// The path tracer's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathSettings {
@@ -103,6 +121,8 @@ pub struct PathSettings {
     pub light_choice: LightChoice,
     /// Where textures are looked up.
     pub texture_space: TextureSpace,
+    /// Which caustic paths count ([`CausticPaths::Keep`]: all).
+    pub caustics: CausticPaths,
 }
 
 impl Default for PathSettings {
@@ -116,6 +136,7 @@ impl Default for PathSettings {
             strategy: Strategy::Mis,
             light_choice: LightChoice::Power,
             texture_space: TextureSpace::World,
+            caustics: CausticPaths::Keep,
         }
     }
 }
@@ -552,6 +573,10 @@ impl Integrator for PathTracer {
         // direction, and whether it came from a delta lobe.
         let mut prev: Option<(Vec3, f32, bool)> = None;
         let mut depth = 0u32;
+        // Whether the last non-delta vertex starts caustics that
+        // `settings.caustics` drops, and whether light found now (through
+        // delta lobes since that vertex) is one.
+        let (mut from_dropping, mut dropped) = (false, false);
         loop {
             let weight = beta.max_element();
             let hit = cx.closest(
@@ -572,6 +597,9 @@ impl Integrator for PathTracer {
                 if eh.le == Vec3::ZERO {
                     continue;
                 }
+                if dropped {
+                    continue;
+                }
                 let w = match prev {
                     None | Some((_, _, true)) => 1.0,
                     Some((p, pdf_bsdf, false)) => {
@@ -590,6 +618,9 @@ impl Integrator for PathTracer {
             }
             let Some(h) = hit else {
                 // The uniform environment: found only by BSDF sampling.
+                if dropped {
+                    break;
+                }
                 radiance += beta * background;
                 if background != Vec3::ZERO {
                     cx.observer.light(1.0, beta * background);
@@ -601,7 +632,7 @@ impl Integrator for PathTracer {
             }
             let m = self.material(world, h.material, h.instance, h.point);
             let le = self.emitted(&m, &h, &ray);
-            if le != Vec3::ZERO {
+            if le != Vec3::ZERO && !dropped {
                 let w = match prev {
                     None | Some((_, _, true)) => 1.0,
                     Some((p, pdf_bsdf, false)) => {
@@ -690,6 +721,15 @@ impl Integrator for PathTracer {
             } else {
                 RayKind::Reflected
             };
+            // (`depth` is already this vertex's depth + 1.)
+            if !bs.delta {
+                from_dropping = match s.caustics {
+                    CausticPaths::Keep => false,
+                    CausticPaths::DropSeen => depth == 1,
+                    CausticPaths::DropAll => true,
+                };
+            }
+            dropped = from_dropping && bs.delta;
             prev = Some((h.point, bs.pdf, bs.delta));
             ray = spawn.spawn_ray(bs.wi).at_time(camera_ray.time);
             ray_tmin = 0.0;
