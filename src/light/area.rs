@@ -4,6 +4,7 @@
 //! whole contribution.
 
 use super::Incident;
+use crate::math::float::sincos_turn;
 pub use crate::math::warp::concentric_disk;
 use crate::math::{gamma, SurfacePoint, Vec2, Vec3};
 use crate::scene::{AreaShape, RenderAreaShape};
@@ -332,8 +333,8 @@ impl Cone {
         } = *self;
         let cos_t = 1.0 - u.x * (1.0 - cos_max);
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let phi = TAU * u.y;
-        let w = (t1 * phi.cos() + t2 * phi.sin()) * sin_t + axis * cos_t;
+        let (sin_p, cos_p) = sincos_turn(u.y);
+        let w = (t1 * cos_p + t2 * sin_p) * sin_t + axis * cos_t;
         // Nearest intersection with the sphere along w (it exists up to rounding).
         let b = w.dot(to_c);
         let disc = (r * r - (d2 - b * b)).max(0.0);
