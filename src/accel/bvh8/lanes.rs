@@ -95,10 +95,17 @@ impl Lanes {
     /// The largest lane of those in `mask` (`−inf` for none).
     #[inline(always)]
     pub fn max_of(self, mask: u32) -> f32 {
+        // A plain loop: the iterator form (`filter`, `fold`) called its
+        // closure out of line, once per lane (callgrind: 11% of a camera
+        // packet's instructions).
         let a = self.to_array();
-        (0..W)
-            .filter(|&i| mask >> i & 1 != 0)
-            .fold(f32::NEG_INFINITY, |m, i| m.max(a[i]))
+        let mut m = f32::NEG_INFINITY;
+        for (i, &x) in a.iter().enumerate() {
+            if mask >> i & 1 != 0 {
+                m = m.max(x);
+            }
+        }
+        m
     }
 
     /// Per lane, `self`'s value where `keep(self, o)` on the bit patterns

@@ -19,11 +19,17 @@
 //! negative `tmin`, an origin far out), are walked one ray at a time.
 
 use super::lanes::{Lanes, W};
+#[cfg(target_arch = "x86_64")]
+use super::node::Tri4;
 use super::node::{is_leaf, Node, EMPTY, NO_ITEM};
 use super::traverse::{
     self, insert_far_first, BoxTest, Closest, Fallback, LeafRay, Nearest, RayData, Tree, ANY_OCTANT,
 };
+#[cfg(target_arch = "x86_64")]
+use super::traverse::{triangle_lanes, Avx};
 use crate::math::Ray;
+#[cfg(target_arch = "x86_64")]
+use crate::shape::{hit8_avx, WatertightRay, WatertightRay8, F8};
 use crate::stats::TraversalStats;
 
 /// Most rays in a packet.
@@ -103,19 +109,29 @@ impl Frustum {
             return (None, walked);
         };
         let first = walked.trailing_zeros() as usize;
-        let lanes = |k: usize| {
-            let mut l = Lanes::splat(v[k][first]);
-            let (mut lo, mut hi) = (v[k][first], v[k][first]);
+        // Plain loops, not `array::from_fn` over a closure, which was
+        // called out of line (callgrind: 4% of a camera packet).
+        let mut l = [[0f32; PACKET]; 7];
+        let (mut lo, mut hi) = ([0f32; 7], [0f32; 7]);
+        for k in 0..7 {
+            let v0 = v[k][first];
+            (lo[k], hi[k]) = (v0, v0);
             for r in 0..PACKET {
-                if walked >> r & 1 != 0 {
-                    l[r] = v[k][r];
-                    lo = lo.min(v[k][r]);
-                    hi = hi.max(v[k][r]);
-                }
+                let x = if walked >> r & 1 != 0 { v[k][r] } else { v0 };
+                l[k][r] = x;
+                lo[k] = lo[k].min(x);
+                hi[k] = hi[k].max(x);
             }
-            (l, Lanes::splat(lo), Lanes::splat(hi))
+        }
+        let lanes = |k: usize| {
+            let l = Lanes([
+                glam::Vec4::from_slice(&l[k][..4]),
+                glam::Vec4::from_slice(&l[k][4..]),
+            ]);
+            (l, Lanes::splat(lo[k]), Lanes::splat(hi[k]))
         };
-        let [x, y, z, ox, oy, oz, t] = std::array::from_fn(lanes);
+        let (x, y, z) = (lanes(0), lanes(1), lanes(2));
+        let (ox, oy, oz, t) = (lanes(3), lanes(4), lanes(5), lanes(6));
         // Directions that differ much along an axis (the bounds of a
         // component's `1 / d` far apart relative to its size) make the
         // bounds loose: the packet would enter boxes none of its rays
@@ -307,10 +323,13 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
     let mut tmax = tmax_lanes(rays);
     let mut best: [Option<Closest>; PACKET] = [None; PACKET];
     let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
+    #[cfg(target_arch = "x86_64")]
+    let mut leaf8 = None;
     let mut stack = [(0u32, 0u32, 0f32); N];
     let mut sp = 0usize;
     let (mut cur, mut active) = (0u32, walked);
     while active != 0 {
+        let mut leaf_done = false;
         if !is_leaf(cur) {
             let node = tree.node::<S>(cur, &mut n_nodes);
             let (mut mask, dist) = f.boxes(node, tmax.max_of(active));
@@ -339,14 +358,23 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
                 continue;
             }
         } else if cur != EMPTY {
-            each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
-                let mut near = Nearest {
-                    tmax: tmax[r],
-                    best: best[r],
-                };
-                n_tests += tree.nearest_in_leaf::<S, _>(bt, cur, lr, q.tmin, &mut near);
-                (tmax[r], best[r]) = (near.tmax, near.best);
-            });
+            #[cfg(target_arch = "x86_64")]
+            if let Some(avx) = bt.avx() {
+                let lr = leaf8.get_or_insert_with(|| LeafRays::new(rays, walked));
+                n_tests +=
+                    nearest_in_leaf8::<S, F>(avx, tree, cur, lr, active, &mut tmax, &mut best);
+                leaf_done = true;
+            }
+            if !leaf_done {
+                each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
+                    let mut near = Nearest {
+                        tmax: tmax[r],
+                        best: best[r],
+                    };
+                    n_tests += tree.nearest_in_leaf::<S, _>(bt, cur, lr, q.tmin, &mut near);
+                    (tmax[r], best[r]) = (near.tmax, near.best);
+                });
+            }
         }
         // Pop the nearest pending child that some ray can still find a
         // closer hit in (the entry's distance is below each ray's own).
@@ -385,6 +413,8 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
     let tmax = tmax_lanes(rays);
     let tmax_hi = tmax.max_of(walked);
     let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
+    #[cfg(target_arch = "x86_64")]
+    let (mut leaf8, tmax8) = (None, F8(tmax.to_array()));
     let mut stack = [(0u32, 0u32); N];
     let mut sp = 0usize;
     let mut hit = 0u32;
@@ -392,6 +422,7 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
     let mut open = walked;
     let (mut cur, mut active) = (0u32, walked);
     loop {
+        let mut leaf_done = false;
         if !is_leaf(cur) {
             let node = tree.node::<S>(cur, &mut n_nodes);
             let (mut mask, _) = f.boxes(node, tmax_hi);
@@ -416,15 +447,28 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
                 continue;
             }
         } else if cur != EMPTY {
-            each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
-                let range = (q.tmin, q.tmax);
-                let (blocked, tests) = tree.blocked_in_leaf::<S, _>(bt, cur, lr, range, skip_of(r));
+            #[cfg(target_arch = "x86_64")]
+            if let Some(avx) = bt.avx() {
+                let lr = leaf8.get_or_insert_with(|| LeafRays::new(rays, walked));
+                let (blocked, tests) =
+                    blocked_in_leaf8::<S, F>(avx, tree, cur, lr, active, &tmax8, skip);
                 n_tests += tests;
-                if blocked {
-                    hit |= 1 << r;
-                    open &= !(1 << r);
-                }
-            });
+                hit |= blocked;
+                open &= !blocked;
+                leaf_done = true;
+            }
+            if !leaf_done {
+                each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
+                    let range = (q.tmin, q.tmax);
+                    let (blocked, tests) =
+                        tree.blocked_in_leaf::<S, _>(bt, cur, lr, range, skip_of(r));
+                    n_tests += tests;
+                    if blocked {
+                        hit |= 1 << r;
+                        open &= !(1 << r);
+                    }
+                });
+            }
         }
         active = 0;
         while sp > 0 && open != 0 {
@@ -441,6 +485,219 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
     }
     stats.add(n_nodes, n_tests);
     hit
+}
+
+/// The packet's rays at leaves, for the AVX leaf test: each walked ray's
+/// watertight constants (`shape::WatertightRay8`) and `tmin`, one lane per
+/// ray. Made at the first leaf the packet reaches.
+#[cfg(target_arch = "x86_64")]
+struct LeafRays<'r> {
+    rays: &'r [PacketRay],
+    w8: WatertightRay8,
+    tmin: F8,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<'r> LeafRays<'r> {
+    #[inline(always)]
+    fn new(rays: &'r [PacketRay], walked: u32) -> Self {
+        let mut tmin = F8::default();
+        for (r, q) in rays.iter().enumerate() {
+            tmin.0[r] = q.tmin;
+        }
+        LeafRays {
+            rays,
+            w8: WatertightRay8::new(|r| {
+                (walked >> r & 1 != 0).then(|| WatertightRay::new(&rays[r].ray))
+            }),
+            tmin,
+        }
+    }
+
+    /// The rays of `active` grouped by dominant axis (`kz`, the lanes of
+    /// one [`hit8_avx`] call), and how many groups: usually one.
+    #[inline(always)]
+    fn groups(&self, active: u32) -> ([(usize, u32); 3], usize) {
+        let mut g = [(0, 0); 3];
+        let mut n = 0;
+        for (kz, &lanes) in self.w8.by_axis.iter().enumerate() {
+            if active & lanes != 0 {
+                g[n] = (kz, active & lanes);
+                n += 1;
+            }
+        }
+        (g, n)
+    }
+}
+
+/// Triangle `j` of block `b`: `p[k][a]`, coordinate `a` of vertex `k`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn vertices(b: &Tri4, j: usize) -> [[f32; 3]; 3] {
+    // Through arrays: a `Vec4` indexed by a run-time lane compiles to a
+    // jump table.
+    let c = |k: usize, a: usize| AsRef::<[f32; 4]>::as_ref(&b.v[k][a])[j];
+    [
+        [c(0, 0), c(0, 1), c(0, 2)],
+        [c(1, 0), c(1, 1), c(1, 2)],
+        [c(2, 0), c(2, 1), c(2, 2)],
+    ]
+}
+
+/// Leaf `c` for the closest-hit walk of the rays `active`, on AVX: each
+/// triangle against all those rays at once (`shape::hit8_avx`, each ray's
+/// own watertight test bit for bit), each hit offered to its ray's
+/// [`Nearest`] (`tmax`, `best`); the items that are not triangles ray by
+/// ray, as `Tree::nearest_in_leaf` tests them. Each ray ends with the
+/// hit its own `nearest_in_leaf` keeps: a hit is kept by the rule of
+/// `Nearest::closer`, which makes the result the nearest hit in the ray's
+/// range, ties to the smallest id, whatever the order of the offers; the
+/// range a triangle is tested in (`Nearest::test_tmax` after the previous
+/// offers) only leaves out hits that rule would refuse. Returns the items
+/// tested, per ray (0 unless `S::ENABLED`).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn nearest_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
+    _avx: Avx,
+    tree: &Tree<F>,
+    c: u32,
+    lr: &LeafRays,
+    active: u32,
+    tmax: &mut Lanes,
+    best: &mut [Option<Closest>; PACKET],
+) -> u64 {
+    let mut tests = 0;
+    let mut test_tmax = F8::default();
+    let (groups, n_groups) = lr.groups(active);
+    let mut todo = active;
+    while todo != 0 {
+        let r = todo.trailing_zeros() as usize;
+        todo &= todo - 1;
+        test_tmax.0[r] = Nearest {
+            tmax: tmax[r],
+            best: best[r],
+        }
+        .test_tmax();
+    }
+    let mut offer = |r: usize, t: f32, id: u32, bary: Option<[f32; 3]>, tt: &mut F8| {
+        let mut near = Nearest {
+            tmax: tmax[r],
+            best: best[r],
+        };
+        near.offer(t, id, bary);
+        (tmax[r], best[r]) = (near.tmax, near.best);
+        tt.0[r] = near.test_tmax();
+    };
+    for b in tree.leaf(c) {
+        if S::ENABLED {
+            tests += b.items() * u64::from(active.count_ones());
+        }
+        let mut tri = triangle_lanes(b);
+        while tri != 0 {
+            let j = tri.trailing_zeros() as usize;
+            tri &= tri - 1;
+            let p = vertices(b, j);
+            for &(kz, lanes) in &groups[..n_groups] {
+                // SAFETY: an `Avx` token exists only where AVX2 (hence AVX)
+                // was detected at run time (see `Avx::new`).
+                let h = unsafe { hit8_avx(&lr.w8, kz, &p, lanes, &lr.tmin, &test_tmax) };
+                let mut m = h.mask;
+                while m != 0 {
+                    let r = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let bary = [h.b[0].0[r], h.b[1].0[r], h.b[2].0[r]];
+                    offer(r, h.t.0[r], b.ids[j], Some(bary), &mut test_tmax);
+                }
+            }
+        }
+        if b.has_other() {
+            let mut todo = active;
+            while todo != 0 {
+                let r = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let q = &lr.rays[r];
+                for id in b.others() {
+                    let hit = tree.fallback.intersect(id, &q.ray, q.tmin, test_tmax.0[r]);
+                    if let Some(t) = hit {
+                        offer(r, t, id, None, &mut test_tmax);
+                    }
+                }
+            }
+        }
+    }
+    tests
+}
+
+/// Leaf `c` for the any-hit walk of the rays `active` (ranges `tmin` and
+/// `tmax`, `skip` as [`any`]'s), on AVX: each triangle against the rays
+/// not yet blocked, at once (`shape::hit8_avx`); the items that are not
+/// triangles ray by ray. Returns the rays blocked (each ray's own
+/// `Tree::blocked_in_leaf` answer) and the items tested up to the block
+/// that blocks each (0 unless `S::ENABLED`).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn blocked_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
+    _avx: Avx,
+    tree: &Tree<F>,
+    c: u32,
+    lr: &LeafRays,
+    active: u32,
+    tmax: &F8,
+    skip: &[u32],
+) -> (u32, u64) {
+    let mut tests = 0;
+    let mut open = active;
+    let (groups, n_groups) = lr.groups(active);
+    for b in tree.leaf(c) {
+        if open == 0 {
+            break;
+        }
+        if S::ENABLED {
+            tests += b.items() * u64::from(open.count_ones());
+        }
+        let mut tri = triangle_lanes(b);
+        while tri != 0 && open != 0 {
+            let j = tri.trailing_zeros() as usize;
+            tri &= tri - 1;
+            let p = vertices(b, j);
+            let mut rays = open;
+            if !skip.is_empty() {
+                let mut todo = open;
+                while todo != 0 {
+                    let r = todo.trailing_zeros() as usize;
+                    todo &= todo - 1;
+                    if skip[r] == b.ids[j] {
+                        rays &= !(1 << r);
+                    }
+                }
+            }
+            for &(kz, lanes) in &groups[..n_groups] {
+                let lanes = lanes & rays;
+                if lanes != 0 {
+                    // SAFETY: an `Avx` token exists only where AVX2 (hence
+                    // AVX) was detected at run time (see `Avx::new`).
+                    open &= !unsafe { hit8_avx(&lr.w8, kz, &p, lanes, &lr.tmin, tmax) }.mask;
+                }
+            }
+        }
+        if b.has_other() {
+            let mut todo = open;
+            while todo != 0 {
+                let r = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let q = &lr.rays[r];
+                let mut others = b.others();
+                if others.any(|id| {
+                    tree.fallback
+                        .intersect(id, &q.ray, q.tmin, q.tmax)
+                        .is_some()
+                }) {
+                    open &= !(1 << r);
+                }
+            }
+        }
+    }
+    (active & !open, tests)
 }
 
 #[cfg(test)]

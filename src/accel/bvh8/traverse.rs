@@ -543,7 +543,7 @@ impl BoxTest for Avx {
 /// The lanes of a block that hold triangles (not [`OTHER`] items, not unused:
 /// [`NO_ITEM`] has the flag too).
 #[inline(always)]
-fn triangle_lanes(b: &Tri4) -> u32 {
+pub(crate) fn triangle_lanes(b: &Tri4) -> u32 {
     // Both flags are the id's top bit: the lanes whose id, read as an f32,
     // has its sign bit clear (one `movmskps`; no arithmetic on the bits).
     const _: () = assert!(OTHER == 1 << 31 && NO_ITEM & OTHER != 0);
@@ -680,7 +680,7 @@ impl Nearest {
 
     /// Keeps hit `(t, id)` if it is [`closer`](Self::closer).
     #[inline(always)]
-    fn offer(&mut self, t: f32, id: u32, bary: Option<[f32; 3]>) {
+    pub(crate) fn offer(&mut self, t: f32, id: u32, bary: Option<[f32; 3]>) {
         if self.closer(t, id) {
             self.tmax = t;
             self.best = Some(Closest { t, id, bary });
