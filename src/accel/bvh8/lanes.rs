@@ -51,6 +51,38 @@ impl Lanes {
         Lanes([self.0[0].min(o.0[0]), self.0[1].min(o.0[1])])
     }
 
+    /// Lanes from an array.
+    #[inline(always)]
+    pub fn from_array(a: [f32; W]) -> Lanes {
+        Lanes([Vec4::from_slice(&a[..4]), Vec4::from_slice(&a[4..])])
+    }
+
+    /// The smallest lane (`minps` folded: for lanes without NaN, the
+    /// minimum).
+    #[inline(always)]
+    pub fn min_element(self) -> f32 {
+        self.0[0].min(self.0[1]).min_element()
+    }
+
+    /// The largest lane (`maxps` folded: for lanes without NaN, the
+    /// maximum).
+    #[inline(always)]
+    pub fn max_element(self) -> f32 {
+        self.0[0].max(self.0[1]).max_element()
+    }
+
+    /// Bit `i` set where lane `i`'s sign bit is.
+    #[inline(always)]
+    pub fn sign_bits(self) -> u32 {
+        self.0[0].is_negative_bitmask() | self.0[1].is_negative_bitmask() << 4
+    }
+
+    /// Bit `i` set where lane `i` is finite.
+    #[inline(always)]
+    pub fn finite_bits(self) -> u32 {
+        self.0[0].is_finite_mask().bitmask() | self.0[1].is_finite_mask().bitmask() << 4
+    }
+
     /// The eight lanes as an array (cheap to index by a run-time lane).
     #[inline(always)]
     pub fn to_array(self) -> [f32; W] {
@@ -92,20 +124,21 @@ impl Lanes {
         Lanes([pick(0), pick(1)])
     }
 
-    /// The largest lane of those in `mask` (`−inf` for none).
+    /// The largest lane of those in `mask`, NaN lanes left out (`−inf` for
+    /// none), as `f32::max` folds them.
     #[inline(always)]
     pub fn max_of(self, mask: u32) -> f32 {
-        // A plain loop: the iterator form (`filter`, `fold`) called its
-        // closure out of line, once per lane (callgrind: 11% of a camera
-        // packet's instructions).
-        let a = self.to_array();
-        let mut m = f32::NEG_INFINITY;
-        for (i, &x) in a.iter().enumerate() {
-            if mask >> i & 1 != 0 {
-                m = m.max(x);
+        // The lanes outside `mask` and NaN lanes made `−inf`, then one
+        // reduction (the iterator form, `filter` and `fold`, called its
+        // closure out of line once per lane: 11% of a camera packet's
+        // instructions).
+        let mut v = self.to_array();
+        for (i, x) in v.iter_mut().enumerate() {
+            if mask >> i & 1 == 0 || x.is_nan() {
+                *x = f32::NEG_INFINITY;
             }
         }
-        m
+        Lanes::from_array(v).max_element()
     }
 
     /// Per lane, `self`'s value where `keep(self, o)` on the bit patterns
@@ -139,14 +172,16 @@ impl std::ops::Index<usize> for Lanes {
     type Output = f32;
     #[inline(always)]
     fn index(&self, i: usize) -> &f32 {
-        &self.0[i / 4][i % 4]
+        // Through the array: `Vec4`'s own index is a `match`, a jump table
+        // for a run-time lane.
+        &self.0[i / 4].as_ref()[i % 4]
     }
 }
 
 impl std::ops::IndexMut<usize> for Lanes {
     #[inline(always)]
     fn index_mut(&mut self, i: usize) -> &mut f32 {
-        &mut self.0[i / 4][i % 4]
+        &mut self.0[i / 4].as_mut()[i % 4]
     }
 }
 

@@ -31,6 +31,7 @@ use crate::math::Ray;
 #[cfg(target_arch = "x86_64")]
 use crate::shape::{hit8_avx, WatertightRay, WatertightRay8, F8};
 use crate::stats::TraversalStats;
+use glam::Vec4;
 
 /// Most rays in a packet.
 pub const PACKET: usize = 8;
@@ -76,8 +77,8 @@ struct Frustum {
     oi_lo: [Lanes; 3],
     oi_hi: [Lanes; 3],
     tmin_lo: Lanes,
-    near: [usize; 3],
-    far: [usize; 3],
+    /// Bit `a` set where the rays run towards −axis `a`.
+    octant: usize,
 }
 
 impl Frustum {
@@ -87,51 +88,68 @@ impl Frustum {
     /// lanes copy the first walked ray.
     #[inline(always)]
     fn new(rays: &[PacketRay]) -> (Option<Frustum>, u32) {
-        let mut v = [[0f32; PACKET]; 7];
-        let (mut walked, mut octant, mut mixed) = (0u32, None, false);
-        for (r, q) in rays.iter().enumerate() {
-            let (inv, oi) = RayData::inv_oi(&q.ray);
-            if !(oi.is_finite() && q.tmin >= 0.0 && q.tmin.is_sign_positive()) {
-                continue;
-            }
-            walked |= 1 << r;
-            let neg = |a: usize| usize::from(inv[a].is_sign_negative()) << a;
-            let o = neg(0) | neg(1) | neg(2);
-            mixed |= octant.is_some_and(|x| x != o);
-            octant = Some(o);
+        // The rays' components as lanes (lanes past the packet copy its
+        // last ray), and each one's `1 / dir` and `origin · inv` with the
+        // operations of `RayData::inv_oi`, four lanes at a time.
+        let n = rays.len();
+        let mut d = [[0f32; PACKET]; 3];
+        let mut o = [[0f32; PACKET]; 3];
+        let mut tmin = [0f32; PACKET];
+        for r in 0..PACKET {
+            let q = &rays[r.min(n - 1)];
             for a in 0..3 {
-                v[a][r] = inv[a];
-                v[3 + a][r] = oi[a];
+                d[a][r] = q.ray.dir[a];
+                o[a][r] = q.ray.origin[a];
             }
-            v[6][r] = q.tmin;
+            tmin[r] = q.tmin;
         }
-        let Some(octant) = octant.filter(|_| !mixed) else {
-            return (None, walked);
-        };
-        let first = walked.trailing_zeros() as usize;
-        // Plain loops, not `array::from_fn` over a closure, which was
-        // called out of line (callgrind: 4% of a camera packet).
-        let mut l = [[0f32; PACKET]; 7];
-        let (mut lo, mut hi) = ([0f32; 7], [0f32; 7]);
-        for k in 0..7 {
-            let v0 = v[k][first];
-            (lo[k], hi[k]) = (v0, v0);
-            for r in 0..PACKET {
-                let x = if walked >> r & 1 != 0 { v[k][r] } else { v0 };
-                l[k][r] = x;
-                lo[k] = lo[k].min(x);
-                hi[k] = hi[k].max(x);
+        let mut inv = [Lanes::splat(0.0); 3];
+        let mut oi = [Lanes::splat(0.0); 3];
+        // Finite `origin · inv` on every axis, and `tmin` at `+0` or more.
+        let t = Lanes::from_array(tmin);
+        let mut ok = t.0[0].cmpge(Vec4::ZERO).bitmask() | t.0[1].cmpge(Vec4::ZERO).bitmask() << 4;
+        ok &= !t.sign_bits();
+        for a in 0..3 {
+            (inv[a], oi[a]) =
+                RayData::inv_oi_lanes(Lanes::from_array(d[a]), Lanes::from_array(o[a]));
+            ok &= oi[a].finite_bits();
+        }
+        let walked = ok & ((1 << n) - 1);
+        if walked == 0 {
+            return (None, 0);
+        }
+        // One octant: each axis's sign bits of `1 / d` all set or all clear
+        // on the walked rays.
+        let mut octant = 0;
+        for (a, inv) in inv.iter().enumerate() {
+            let neg = inv.sign_bits() & walked;
+            if neg != 0 && neg != walked {
+                return (None, walked);
+            }
+            octant |= usize::from(neg != 0) << a;
+        }
+        let mut t = t;
+        if walked != 0xff {
+            // Lanes of rays not walked copy the first walked ray's.
+            let first = walked.trailing_zeros() as usize;
+            for l in inv.iter_mut().chain(&mut oi).chain([&mut t]) {
+                let v0 = l[first];
+                for r in 0..PACKET {
+                    if walked >> r & 1 == 0 {
+                        l[r] = v0;
+                    }
+                }
             }
         }
-        let lanes = |k: usize| {
-            let l = Lanes([
-                glam::Vec4::from_slice(&l[k][..4]),
-                glam::Vec4::from_slice(&l[k][4..]),
-            ]);
-            (l, Lanes::splat(lo[k]), Lanes::splat(hi[k]))
+        let lanes = |l: Lanes| {
+            (
+                l,
+                Lanes::splat(l.min_element()),
+                Lanes::splat(l.max_element()),
+            )
         };
-        let (x, y, z) = (lanes(0), lanes(1), lanes(2));
-        let (ox, oy, oz, t) = (lanes(3), lanes(4), lanes(5), lanes(6));
+        let (x, y, z) = (lanes(inv[0]), lanes(inv[1]), lanes(inv[2]));
+        let (ox, oy, oz, t) = (lanes(oi[0]), lanes(oi[1]), lanes(oi[2]), lanes(t));
         // Directions that differ much along an axis (the bounds of a
         // component's `1 / d` far apart relative to its size) make the
         // bounds loose: the packet would enter boxes none of its rays
@@ -143,7 +161,6 @@ impl Frustum {
         if ![&x, &y, &z].into_iter().all(tight) {
             return (None, walked);
         }
-        let s = |a: usize| (octant >> a) & 1;
         let f = Frustum {
             inv: [x.0, y.0, z.0],
             oi: [ox.0, oy.0, oz.0],
@@ -153,8 +170,7 @@ impl Frustum {
             oi_lo: [ox.1, oy.1, oz.1],
             oi_hi: [ox.2, oy.2, oz.2],
             tmin_lo: t.1,
-            near: [3 * s(0), 1 + 3 * s(1), 2 + 3 * s(2)],
-            far: [3 - 3 * s(0), 4 - 3 * s(1), 5 - 3 * s(2)],
+            octant,
         };
         (Some(f), walked)
     }
@@ -164,13 +180,13 @@ impl Frustum {
     /// distances per box.
     #[inline(always)]
     fn boxes(&self, n: &Node, tmax_hi: f32) -> (u32, Lanes) {
-        let p = &n.planes;
+        let (near, far) = self.planes(n);
         let near = |a: usize| {
-            let pl = p[self.near[a]];
+            let pl = *near[a];
             pl.mul_sub(pl.by_sign(self.inv_hi[a], self.inv_lo[a]), self.oi_hi[a])
         };
         let far = |a: usize| {
-            let pl = p[self.far[a]];
+            let pl = *far[a];
             pl.mul_sub(pl.by_sign(self.inv_lo[a], self.inv_hi[a]), self.oi_lo[a])
         };
         let tn = near(0).max(near(1)).max(near(2).max(self.tmin_lo));
@@ -184,15 +200,27 @@ impl Frustum {
     /// boxes include those of its integer form.
     #[inline(always)]
     fn rays_into(&self, n: &Node, c: usize, tmax: Lanes) -> u32 {
-        let p = &n.planes;
-        let t = |k: usize, a: usize| Lanes::splat(p[k][c]).mul_sub(self.inv[a], self.oi[a]);
-        let tn = t(self.near[0], 0)
-            .max(t(self.near[1], 1))
-            .max(t(self.near[2], 2).max(self.tmin));
-        let tf = t(self.far[0], 0)
-            .min(t(self.far[1], 1))
-            .min(t(self.far[2], 2).min(tmax));
+        let (near, far) = self.planes(n);
+        let t = |p: &Lanes, a: usize| Lanes::splat(p[c]).mul_sub(self.inv[a], self.oi[a]);
+        let tn = t(near[0], 0)
+            .max(t(near[1], 1))
+            .max(t(near[2], 2).max(self.tmin));
+        let tf = t(far[0], 0).min(t(far[1], 1)).min(t(far[2], 2).min(tmax));
         tn.le_mask(tf)
+    }
+
+    /// The near and far planes of `n` per axis for the packet's octant
+    /// (`RayData::planes`' choice), picked from the octant's bits: no
+    /// index to load and bounds-check per plane.
+    #[inline(always)]
+    fn planes<'n>(&self, n: &'n Node) -> ([&'n Lanes; 3], [&'n Lanes; 3]) {
+        let p = &n.planes;
+        let pick = |a: usize, neg: bool| if neg { &p[a + 3] } else { &p[a] };
+        let s = |a: usize| self.octant >> a & 1 != 0;
+        (
+            [pick(0, s(0)), pick(1, s(1)), pick(2, s(2))],
+            [pick(0, !s(0)), pick(1, !s(1)), pick(2, !s(2))],
+        )
     }
 }
 

@@ -224,6 +224,19 @@ impl RayData {
         (inv, ray.origin * inv)
     }
 
+    /// [`inv_oi`](Self::inv_oi) of eight rays at once, one lane per ray
+    /// (`d` and `o` their directions' and origins' components per axis):
+    /// the same operations ([`safe_inverse`]'s `abs`, `maxps`, `copysign`
+    /// and division, then the product) on four lanes at a time, so the
+    /// same values.
+    #[inline(always)]
+    pub(crate) fn inv_oi_lanes(d: Lanes, o: Lanes) -> (Lanes, Lanes) {
+        let tiny = Vec4::splat(1e-18);
+        let inv = |d: Vec4| Vec4::ONE / d.abs().max(tiny).copysign(d);
+        let inv = Lanes([inv(d.0[0]), inv(d.0[1])]);
+        (inv, Lanes([o.0[0] * inv.0[0], o.0[1] * inv.0[1]]))
+    }
+
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         let (inv, oi) = Self::inv_oi(ray);
