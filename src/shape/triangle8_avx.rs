@@ -35,7 +35,7 @@
 //! sees no NaN in a lane that can be a hit.
 
 use super::triangle::WatertightRay;
-use crate::math::gamma;
+use crate::math::{gamma, Vec4};
 
 /// Eight f32 lanes, 32-byte aligned (one 256-bit load).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -88,8 +88,9 @@ pub struct Hits8 {
     pub b: [F8; 3],
 }
 
-/// [`intersect_triangle`](super::intersect_triangle) of the triangle `p`
-/// (`p[k][a]`: coordinate `a` of vertex `k`) on the rays of `r` in
+/// [`intersect_triangle`](super::intersect_triangle) of triangle `j` of
+/// the block `v` (`v[k][a]`: coordinate `a` of vertex `k`, one lane per
+/// triangle, as `bvh8`'s leaf blocks hold them) on the rays of `r` in
 /// `lanes`, each in its own `(tmin, tmax)` (lane `r` of each), bit for bit
 /// (see the module's comment). Every lane of `lanes` must have dominant
 /// axis `kz` (`r.by_axis[kz]`); lanes outside `lanes` are never hit.
@@ -104,7 +105,8 @@ pub struct Hits8 {
 pub unsafe fn hit8_avx(
     r: &WatertightRay8,
     kz: usize,
-    p: &[[f32; 3]; 3],
+    v: &[[Vec4; 3]; 3],
+    j: usize,
     lanes: u32,
     tmin: &F8,
     tmax: &F8,
@@ -120,26 +122,29 @@ pub unsafe fn hit8_avx(
     // and stores are of 32-byte aligned `F8`s.
     unsafe {
         let ld = |v: &F8| _mm256_load_ps(v.0.as_ptr());
-        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        // `(kz + 1) % 3` and `(kz + 2) % 3`, without the divisions.
+        let (kx, ky) = ([1, 2, 0][kz], [2, 0, 1][kz]);
+        // Coordinate `a` of vertex `k`, broadcast from the block.
+        let bc_v = |k: usize, a: usize| _mm256_broadcast_ss(&v[k][a].as_ref()[j]);
         let (ox, oy, oz) = (ld(&r.o[0]), ld(&r.o[1]), ld(&r.o[2]));
         let (sx, sy) = (ld(&r.s[0]), ld(&r.s[1]));
         let (sub, add, mul) = (_mm256_sub_ps, _mm256_add_ps, _mm256_mul_ps);
         let bc = _mm256_set1_ps;
         // 1. Ray space: `z = p[kz] − o[kz]`, `x = (p[kx] − o[kx]) + sx·z`.
         let z = [
-            sub(bc(p[0][kz]), oz),
-            sub(bc(p[1][kz]), oz),
-            sub(bc(p[2][kz]), oz),
+            sub(bc_v(0, kz), oz),
+            sub(bc_v(1, kz), oz),
+            sub(bc_v(2, kz), oz),
         ];
         let x = [
-            add(sub(bc(p[0][kx]), ox), mul(sx, z[0])),
-            add(sub(bc(p[1][kx]), ox), mul(sx, z[1])),
-            add(sub(bc(p[2][kx]), ox), mul(sx, z[2])),
+            add(sub(bc_v(0, kx), ox), mul(sx, z[0])),
+            add(sub(bc_v(1, kx), ox), mul(sx, z[1])),
+            add(sub(bc_v(2, kx), ox), mul(sx, z[2])),
         ];
         let y = [
-            add(sub(bc(p[0][ky]), oy), mul(sy, z[0])),
-            add(sub(bc(p[1][ky]), oy), mul(sy, z[1])),
-            add(sub(bc(p[2][ky]), oy), mul(sy, z[2])),
+            add(sub(bc_v(0, ky), oy), mul(sy, z[0])),
+            add(sub(bc_v(1, ky), oy), mul(sy, z[1])),
+            add(sub(bc_v(2, ky), oy), mul(sy, z[2])),
         ];
         // 2. The pre-test: (proven negative, proven positive) per edge.
         let signs = |i: usize, j: usize| {
@@ -351,17 +356,20 @@ mod tests {
     use crate::math::testing::Lcg;
     use crate::math::{Ray, Vec3};
     use crate::shape::intersect_triangle;
-    use crate::shape::triangle4::tests::aimed;
+    use crate::shape::triangle4::tests::{aimed, block};
 
     /// Tests `tri` on the rays of lanes `r` (each with its own range), one
     /// call per dominant axis, and checks every lane against the scalar
     /// test, `t` and barycentrics bit for bit. Returns the hits.
-    fn check(rays: &[(Ray, f32, f32); 8], tri: &[Vec3; 3]) -> usize {
+    fn check(rays: &[(Ray, f32, f32); 8], tri: &[Vec3; 3], j: usize) -> usize {
         let w: Vec<WatertightRay> = rays.iter().map(|q| WatertightRay::new(&q.0)).collect();
         let w8 = WatertightRay8::new(|r| Some(w[r]));
         let tmin = F8(rays.map(|q| q.1));
         let tmax = F8(rays.map(|q| q.2));
-        let p = tri.map(|v| v.to_array());
+        // The triangle in lane `j` of a block, the others unused.
+        let mut tris = [[Vec3::splat(f32::NAN); 3]; 4];
+        tris[j] = *tri;
+        let v = block(&tris);
         let (mut mask, mut t, mut b) = (0u32, [0f32; 8], [[0f32; 8]; 3]);
         assert_eq!(w8.by_axis.iter().fold(0, |a, m| a | m), 0xff);
         for kz in 0..3 {
@@ -370,7 +378,7 @@ mod tests {
                 continue;
             }
             // SAFETY: the callers checked for AVX2.
-            let h = unsafe { hit8_avx(&w8, kz, &p, lanes, &tmin, &tmax) };
+            let h = unsafe { hit8_avx(&w8, kz, &v, j, lanes, &tmin, &tmax) };
             assert_eq!(h.mask & !lanes, 0);
             mask |= h.mask;
             for r in 0..8 {
@@ -447,7 +455,7 @@ mod tests {
             {
                 continue;
             }
-            hits += check(&rays, &tri);
+            hits += check(&rays, &tri, i % 4);
             lanes += 8;
         }
         // Measured: 32,510 lane hits of 143,960 lanes (the others miss,
@@ -483,7 +491,7 @@ mod tests {
         for tri in &tris {
             for (tmin, tmax) in [(0.0, f32::INFINITY), (f32::NEG_INFINITY, f32::INFINITY)] {
                 let q: [(Ray, f32, f32); 8] = std::array::from_fn(|r| (rays[r % 4], tmin, tmax));
-                check(&q, tri);
+                check(&q, tri, 3);
             }
         }
     }

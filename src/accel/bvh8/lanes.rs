@@ -124,21 +124,21 @@ impl Lanes {
         Lanes([pick(0), pick(1)])
     }
 
-    /// The largest lane of those in `mask`, NaN lanes left out (`−inf` for
-    /// none), as `f32::max` folds them.
+    /// The largest lane of those in `mask` (`−inf` for none), or an upper
+    /// bound of them: a NaN lane in `mask` counts as `+inf` (`minps`
+    /// returns its second operand for NaN), so the bound is `+inf`.
     #[inline(always)]
     pub fn max_of(self, mask: u32) -> f32 {
-        // The lanes outside `mask` and NaN lanes made `−inf`, then one
-        // reduction (the iterator form, `filter` and `fold`, called its
+        // A plain loop (the iterator form, `filter` and `fold`, called its
         // closure out of line once per lane: 11% of a camera packet's
-        // instructions).
-        let mut v = self.to_array();
-        for (i, x) in v.iter_mut().enumerate() {
-            if mask >> i & 1 == 0 || x.is_nan() {
-                *x = f32::NEG_INFINITY;
-            }
-        }
-        Lanes::from_array(v).max_element()
+        // instructions). `x > m` is false for NaN.
+        // Lanes outside `mask` lowered to `−inf` by a `minps` against a
+        // table of `±inf` per four-bit nibble, then one reduction (a loop
+        // over the lanes' bits branched or called a closure per lane: 5-11%
+        // of a camera packet's instructions).
+        let lo = self.0[0].min(KEEP[mask as usize & 15]);
+        let hi = self.0[1].min(KEEP[mask as usize >> 4 & 15]);
+        lo.max(hi).max_element()
     }
 
     /// Per lane, `self`'s value where `keep(self, o)` on the bit patterns
@@ -159,6 +159,25 @@ impl Lanes {
         ])
     }
 }
+
+/// Per four-bit mask, four lanes of `+inf` where its bit is set and `−inf`
+/// where clear ([`Lanes::max_of`]).
+const KEEP: [Vec4; 16] = {
+    const fn lane(m: usize, i: usize) -> f32 {
+        if m >> i & 1 != 0 {
+            f32::INFINITY
+        } else {
+            f32::NEG_INFINITY
+        }
+    }
+    let mut t = [Vec4::ZERO; 16];
+    let mut m = 0;
+    while m < 16 {
+        t[m] = Vec4::new(lane(m, 0), lane(m, 1), lane(m, 2), lane(m, 3));
+        m += 1;
+    }
+    t
+};
 
 /// An f32's bit pattern as an `i32`: ordered as the f32 values are among
 /// values with the sign bit clear (`+0` to `+inf`); every value with the

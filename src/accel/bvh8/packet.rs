@@ -19,8 +19,6 @@
 //! negative `tmin`, an origin far out), are walked one ray at a time.
 
 use super::lanes::{Lanes, W};
-#[cfg(target_arch = "x86_64")]
-use super::node::Tri4;
 use super::node::{is_leaf, Node, EMPTY, NO_ITEM};
 use super::traverse::{
     self, insert_far_first, BoxTest, Closest, Fallback, LeafRay, Nearest, RayData, Tree, ANY_OCTANT,
@@ -28,8 +26,9 @@ use super::traverse::{
 #[cfg(target_arch = "x86_64")]
 use super::traverse::{triangle_lanes, Avx};
 use crate::math::Ray;
+use crate::shape::F8;
 #[cfg(target_arch = "x86_64")]
-use crate::shape::{hit8_avx, WatertightRay, WatertightRay8, F8};
+use crate::shape::{hit8_avx, WatertightRay, WatertightRay8};
 use crate::stats::TraversalStats;
 use glam::Vec4;
 
@@ -178,8 +177,17 @@ impl Frustum {
     /// The boxes of `n` some ray of the packet may enter before `tmax_hi`
     /// (its largest `tmax`), and a lower bound of the rays' entry
     /// distances per box.
+    ///
+    /// With an [`Avx`] test, the same operations on 256-bit lanes (see
+    /// [`boxes_avx`](Self::boxes_avx)).
     #[inline(always)]
-    fn boxes(&self, n: &Node, tmax_hi: f32) -> (u32, Lanes) {
+    fn boxes<B: BoxTest>(&self, bt: B, n: &Node, tmax_hi: f32) -> (u32, Lanes) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = bt.avx() {
+            return self.boxes_avx(avx, n, tmax_hi);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = bt;
         let (near, far) = self.planes(n);
         let near = |a: usize| {
             let pl = *near[a];
@@ -199,7 +207,13 @@ impl Frustum {
     /// products as `RayData::boxes`, so the same distances), whose
     /// boxes include those of its integer form.
     #[inline(always)]
-    fn rays_into(&self, n: &Node, c: usize, tmax: Lanes) -> u32 {
+    fn rays_into<B: BoxTest>(&self, bt: B, n: &Node, c: usize, tmax: Lanes) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = bt.avx() {
+            return self.rays_into_avx(avx, n, c, tmax);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = bt;
         let (near, far) = self.planes(n);
         let t = |p: &Lanes, a: usize| Lanes::splat(p[c]).mul_sub(self.inv[a], self.oi[a]);
         let tn = t(near[0], 0)
@@ -207,6 +221,68 @@ impl Frustum {
             .max(t(near[2], 2).max(self.tmin));
         let tf = t(far[0], 0).min(t(far[1], 1)).min(t(far[2], 2).min(tmax));
         tn.le_mask(tf)
+    }
+
+    /// [`boxes`](Self::boxes) on 256-bit lanes: the same operations on
+    /// the same operands in the same order (`by_sign` as a `<` compare and
+    /// a blend, `vfmsub` fused as `f32::mul_add` is, `vmaxps`/`vminps`
+    /// with `maxps`'s NaN rule in the same tree, an ordered `<=`), so the
+    /// same mask and distances.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn boxes_avx(&self, _: Avx, n: &Node, tmax_hi: f32) -> (u32, Lanes) {
+        use std::arch::x86_64::*;
+        // SAFETY: an `Avx` value exists only where AVX2 (hence AVX) and
+        // FMA were detected at run time (see `Avx::new`). `Lanes` is
+        // `repr(C)` of two `Vec4`s, eight contiguous f32s, so each
+        // unaligned load reads one `Lanes`, and the transmute back is
+        // between two 32-byte plain-float types.
+        unsafe {
+            let ld = |l: &Lanes| _mm256_loadu_ps(l as *const Lanes as *const f32);
+            let zero = _mm256_setzero_ps();
+            let (near, far) = self.planes(n);
+            // `pl.by_sign(neg, pos).mul_sub(…)`: `neg` where `pl < 0`.
+            let t = |pl: &Lanes, neg: &Lanes, pos: &Lanes, oi: &Lanes| {
+                let pl = ld(pl);
+                let lt = _mm256_cmp_ps::<_CMP_LT_OQ>(pl, zero);
+                _mm256_fmsub_ps(pl, _mm256_blendv_ps(ld(pos), ld(neg), lt), ld(oi))
+            };
+            let near = |a: usize| t(near[a], &self.inv_hi[a], &self.inv_lo[a], &self.oi_hi[a]);
+            let far = |a: usize| t(far[a], &self.inv_lo[a], &self.inv_hi[a], &self.oi_lo[a]);
+            let (max, min) = (_mm256_max_ps, _mm256_min_ps);
+            let tn = max(max(near(0), near(1)), max(near(2), ld(&self.tmin_lo)));
+            let tmax = _mm256_set1_ps(tmax_hi);
+            let tf = min(min(far(0), far(1)), min(far(2), tmax));
+            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+            (mask, std::mem::transmute::<__m256, Lanes>(tn))
+        }
+    }
+
+    /// [`rays_into`](Self::rays_into) on 256-bit lanes, the same
+    /// operations in the same order (as [`boxes_avx`](Self::boxes_avx)).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn rays_into_avx(&self, _: Avx, n: &Node, c: usize, tmax: Lanes) -> u32 {
+        use std::arch::x86_64::*;
+        // SAFETY: as in `boxes_avx`; `p[c]` is an f32 of a `Lanes` (`c <
+        // 8`, indexed through the array, bounds-checked).
+        unsafe {
+            let ld = |l: &Lanes| _mm256_loadu_ps(l as *const Lanes as *const f32);
+            let (near, far) = self.planes(n);
+            let t = |p: &Lanes, a: usize| {
+                _mm256_fmsub_ps(_mm256_set1_ps(p[c]), ld(&self.inv[a]), ld(&self.oi[a]))
+            };
+            let (max, min) = (_mm256_max_ps, _mm256_min_ps);
+            let tn = max(
+                max(t(near[0], 0), t(near[1], 1)),
+                max(t(near[2], 2), ld(&self.tmin)),
+            );
+            let tf = min(
+                min(t(far[0], 0), t(far[1], 1)),
+                min(t(far[2], 2), ld(&tmax)),
+            );
+            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32
+        }
     }
 
     /// The near and far planes of `n` per axis for the packet's octant
@@ -296,9 +372,16 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
 /// them for an inner node (its own test sorts them out), each ray's own
 /// test for a leaf.
 #[inline(always)]
-fn child_rays(f: &Frustum, node: &Node, i: usize, active: u32, tmax: Lanes) -> u32 {
+fn child_rays<B: BoxTest>(
+    bt: B,
+    f: &Frustum,
+    node: &Node,
+    i: usize,
+    active: u32,
+    tmax: Lanes,
+) -> u32 {
     if is_leaf(node.child[i]) {
-        f.rays_into(node, i, tmax) & active
+        f.rays_into(bt, node, i, tmax) & active
     } else {
         active
     }
@@ -336,6 +419,59 @@ fn tmax_lanes(rays: &[PacketRay]) -> Lanes {
     tmax
 }
 
+/// A closest-hit walk's [`Nearest`] of each ray of a packet, as arrays:
+/// `tmax`, `Nearest::test_tmax` (kept up to date) and the best hit.
+struct Nearests {
+    tmax: F8,
+    test_tmax: F8,
+    best: [Option<Closest>; PACKET],
+}
+
+impl Nearests {
+    #[inline(always)]
+    fn new(rays: &[PacketRay]) -> Self {
+        let mut tmax = F8::default();
+        for (r, q) in rays.iter().enumerate() {
+            tmax.0[r] = q.tmax;
+        }
+        Nearests {
+            tmax,
+            test_tmax: tmax,
+            best: [None; PACKET],
+        }
+    }
+
+    /// Each ray's `tmax`, as lanes.
+    #[inline(always)]
+    fn tmax(&self) -> Lanes {
+        Lanes::from_array(self.tmax.0)
+    }
+
+    /// Ray `r`'s [`Nearest`].
+    #[inline(always)]
+    fn get(&self, r: usize) -> Nearest {
+        Nearest {
+            tmax: self.tmax.0[r],
+            best: self.best[r],
+        }
+    }
+
+    /// Sets ray `r`'s [`Nearest`].
+    #[inline(always)]
+    fn set(&mut self, r: usize, near: Nearest) {
+        self.test_tmax.0[r] = near.test_tmax();
+        (self.tmax.0[r], self.best[r]) = (near.tmax, near.best);
+    }
+
+    /// `Nearest::offer` for ray `r`.
+    #[inline(always)]
+    fn offer(&mut self, r: usize, t: f32, id: u32, bary: Option<[f32; 3]>) {
+        let mut near = self.get(r);
+        near.offer(t, id, bary);
+        self.set(r, near);
+    }
+}
+
 /// The closest-hit walk of a packet sharing an octant (see [`Frustum`]),
 /// for the rays `walked`.
 #[inline(always)]
@@ -348,8 +484,7 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
     stats: &mut S,
 ) {
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
-    let mut tmax = tmax_lanes(rays);
-    let mut best: [Option<Closest>; PACKET] = [None; PACKET];
+    let mut near = Nearests::new(rays);
     let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
     #[cfg(target_arch = "x86_64")]
     let mut leaf8 = None;
@@ -360,7 +495,8 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
         let mut leaf_done = false;
         if !is_leaf(cur) {
             let node = tree.node::<S>(cur, &mut n_nodes);
-            let (mut mask, dist) = f.boxes(node, tmax.max_of(active));
+            let tmax = near.tmax();
+            let (mut mask, dist) = f.boxes(bt, node, tmax.max_of(active));
             let dist = dist.to_array();
             // Nearest first: the others pushed far to near.
             let mut kids = [(0u32, 0u32, 0f32); W];
@@ -368,7 +504,7 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let m = child_rays(f, node, i, active, tmax);
+                let m = child_rays(bt, f, node, i, active, tmax);
                 if m == 0 {
                     continue;
                 }
@@ -389,24 +525,21 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
             #[cfg(target_arch = "x86_64")]
             if let Some(avx) = bt.avx() {
                 let lr = leaf8.get_or_insert_with(|| LeafRays::new(rays, walked));
-                n_tests +=
-                    nearest_in_leaf8::<S, F>(avx, tree, cur, lr, active, &mut tmax, &mut best);
+                n_tests += nearest_in_leaf8::<S, F>(avx, tree, cur, lr, active, &mut near);
                 leaf_done = true;
             }
             if !leaf_done {
                 each_ray(rays, &mut leaf_ray, active, |r, q, lr| {
-                    let mut near = Nearest {
-                        tmax: tmax[r],
-                        best: best[r],
-                    };
-                    n_tests += tree.nearest_in_leaf::<S, _>(bt, cur, lr, q.tmin, &mut near);
-                    (tmax[r], best[r]) = (near.tmax, near.best);
+                    let mut n = near.get(r);
+                    n_tests += tree.nearest_in_leaf::<S, _>(bt, cur, lr, q.tmin, &mut n);
+                    near.set(r, n);
                 });
             }
         }
         // Pop the nearest pending child that some ray can still find a
         // closer hit in (the entry's distance is below each ray's own).
         active = 0;
+        let tmax = near.tmax();
         while sp > 0 {
             sp -= 1;
             let (c, m, d) = stack[sp];
@@ -419,7 +552,7 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
     }
     for (r, o) in out.iter_mut().enumerate() {
         if walked & 1 << r != 0 {
-            *o = best[r];
+            *o = near.best[r];
         }
     }
     stats.add(n_nodes, n_tests);
@@ -453,12 +586,12 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
         let mut leaf_done = false;
         if !is_leaf(cur) {
             let node = tree.node::<S>(cur, &mut n_nodes);
-            let (mut mask, _) = f.boxes(node, tmax_hi);
+            let (mut mask, _) = f.boxes(bt, node, tmax_hi);
             let mut next = None;
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let m = child_rays(f, node, i, active, tmax);
+                let m = child_rays(bt, f, node, i, active, tmax);
                 if m == 0 {
                     continue;
                 }
@@ -558,20 +691,6 @@ impl<'r> LeafRays<'r> {
     }
 }
 
-/// Triangle `j` of block `b`: `p[k][a]`, coordinate `a` of vertex `k`.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn vertices(b: &Tri4, j: usize) -> [[f32; 3]; 3] {
-    // Through arrays: a `Vec4` indexed by a run-time lane compiles to a
-    // jump table.
-    let c = |k: usize, a: usize| AsRef::<[f32; 4]>::as_ref(&b.v[k][a])[j];
-    [
-        [c(0, 0), c(0, 1), c(0, 2)],
-        [c(1, 0), c(1, 1), c(1, 2)],
-        [c(2, 0), c(2, 1), c(2, 2)],
-    ]
-}
-
 /// Leaf `c` for the closest-hit walk of the rays `active`, on AVX: each
 /// triangle against all those rays at once (`shape::hit8_avx`, each ray's
 /// own watertight test bit for bit), each hit offered to its ray's
@@ -591,31 +710,10 @@ fn nearest_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
     c: u32,
     lr: &LeafRays,
     active: u32,
-    tmax: &mut Lanes,
-    best: &mut [Option<Closest>; PACKET],
+    near: &mut Nearests,
 ) -> u64 {
     let mut tests = 0;
-    let mut test_tmax = F8::default();
     let (groups, n_groups) = lr.groups(active);
-    let mut todo = active;
-    while todo != 0 {
-        let r = todo.trailing_zeros() as usize;
-        todo &= todo - 1;
-        test_tmax.0[r] = Nearest {
-            tmax: tmax[r],
-            best: best[r],
-        }
-        .test_tmax();
-    }
-    let mut offer = |r: usize, t: f32, id: u32, bary: Option<[f32; 3]>, tt: &mut F8| {
-        let mut near = Nearest {
-            tmax: tmax[r],
-            best: best[r],
-        };
-        near.offer(t, id, bary);
-        (tmax[r], best[r]) = (near.tmax, near.best);
-        tt.0[r] = near.test_tmax();
-    };
     for b in tree.leaf(c) {
         if S::ENABLED {
             tests += b.items() * u64::from(active.count_ones());
@@ -624,17 +722,16 @@ fn nearest_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
         while tri != 0 {
             let j = tri.trailing_zeros() as usize;
             tri &= tri - 1;
-            let p = vertices(b, j);
             for &(kz, lanes) in &groups[..n_groups] {
                 // SAFETY: an `Avx` token exists only where AVX2 (hence AVX)
                 // was detected at run time (see `Avx::new`).
-                let h = unsafe { hit8_avx(&lr.w8, kz, &p, lanes, &lr.tmin, &test_tmax) };
+                let h = unsafe { hit8_avx(&lr.w8, kz, &b.v, j, lanes, &lr.tmin, &near.test_tmax) };
                 let mut m = h.mask;
                 while m != 0 {
                     let r = m.trailing_zeros() as usize;
                     m &= m - 1;
                     let bary = [h.b[0].0[r], h.b[1].0[r], h.b[2].0[r]];
-                    offer(r, h.t.0[r], b.ids[j], Some(bary), &mut test_tmax);
+                    near.offer(r, h.t.0[r], b.ids[j], Some(bary));
                 }
             }
         }
@@ -645,9 +742,9 @@ fn nearest_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
                 todo &= todo - 1;
                 let q = &lr.rays[r];
                 for id in b.others() {
-                    let hit = tree.fallback.intersect(id, &q.ray, q.tmin, test_tmax.0[r]);
-                    if let Some(t) = hit {
-                        offer(r, t, id, None, &mut test_tmax);
+                    let tt = near.test_tmax.0[r];
+                    if let Some(t) = tree.fallback.intersect(id, &q.ray, q.tmin, tt) {
+                        near.offer(r, t, id, None);
                     }
                 }
             }
@@ -687,7 +784,6 @@ fn blocked_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
         while tri != 0 && open != 0 {
             let j = tri.trailing_zeros() as usize;
             tri &= tri - 1;
-            let p = vertices(b, j);
             let mut rays = open;
             if !skip.is_empty() {
                 let mut todo = open;
@@ -704,7 +800,7 @@ fn blocked_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
                 if lanes != 0 {
                     // SAFETY: an `Avx` token exists only where AVX2 (hence
                     // AVX) was detected at run time (see `Avx::new`).
-                    open &= !unsafe { hit8_avx(&lr.w8, kz, &p, lanes, &lr.tmin, tmax) }.mask;
+                    open &= !unsafe { hit8_avx(&lr.w8, kz, &b.v, j, lanes, &lr.tmin, tmax) }.mask;
                 }
             }
         }
