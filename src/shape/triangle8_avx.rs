@@ -111,8 +111,35 @@ pub unsafe fn hit8_avx(
     tmin: &F8,
     tmax: &F8,
 ) -> Hits8 {
-    use std::arch::x86_64::*;
     debug_assert!(kz < 3 && lanes & !r.by_axis[kz] == 0);
+    // One copy per axis: the coordinates' offsets in the block are then
+    // constants (no table, no bounds checks).
+    // SAFETY: the caller guarantees AVX.
+    unsafe {
+        match kz {
+            0 => hit8::<0>(r, v, j, lanes, tmin, tmax),
+            1 => hit8::<1>(r, v, j, lanes, tmin, tmax),
+            _ => hit8::<2>(r, v, j, lanes, tmin, tmax),
+        }
+    }
+}
+
+/// [`hit8_avx`] for dominant axis `KZ`.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn hit8<const KZ: usize>(
+    r: &WatertightRay8,
+    v: &[[Vec4; 3]; 3],
+    j: usize,
+    lanes: u32,
+    tmin: &F8,
+    tmax: &F8,
+) -> Hits8 {
+    use std::arch::x86_64::*;
+    let kz = KZ;
     let miss = Hits8 {
         mask: 0,
         t: F8::default(),
@@ -122,8 +149,7 @@ pub unsafe fn hit8_avx(
     // and stores are of 32-byte aligned `F8`s.
     unsafe {
         let ld = |v: &F8| _mm256_load_ps(v.0.as_ptr());
-        // `(kz + 1) % 3` and `(kz + 2) % 3`, without the divisions.
-        let (kx, ky) = ([1, 2, 0][kz], [2, 0, 1][kz]);
+        let (kx, ky) = ((KZ + 1) % 3, (KZ + 2) % 3);
         // Coordinate `a` of vertex `k`, broadcast from the block.
         let bc_v = |k: usize, a: usize| _mm256_broadcast_ss(&v[k][a].as_ref()[j]);
         let (ox, oy, oz) = (ld(&r.o[0]), ld(&r.o[1]), ld(&r.o[2]));

@@ -80,7 +80,10 @@ impl Lanes {
     /// Bit `i` set where lane `i` is finite.
     #[inline(always)]
     pub fn finite_bits(self) -> u32 {
-        self.0[0].is_finite_mask().bitmask() | self.0[1].is_finite_mask().bitmask() << 4
+        // `|x| < inf`, false for infinities and NaN (glam's
+        // `is_finite_mask` was called out of line).
+        let inf = Vec4::INFINITY;
+        self.0[0].abs().cmplt(inf).bitmask() | self.0[1].abs().cmplt(inf).bitmask() << 4
     }
 
     /// The eight lanes as an array (cheap to index by a run-time lane).
@@ -234,6 +237,32 @@ mod tests {
         assert_eq!(a.le_mask(b), 0b1011_0000);
         let x = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0];
         assert_eq!(lanes(x).to_array(), x);
+    }
+
+    /// The packet walk's helpers: finite and sign bits, the extremes, and
+    /// the largest lane of a mask (a NaN in the mask bounds it at `+inf`).
+    #[test]
+    fn lane_bits_and_extremes() {
+        let a = lanes([
+            1.0,
+            -0.0,
+            f32::INFINITY,
+            f32::NAN,
+            -3.0,
+            0.0,
+            f32::NEG_INFINITY,
+            2.5,
+        ]);
+        assert_eq!(a.finite_bits(), 0b1011_0011);
+        assert_eq!(a.sign_bits() & !(1 << 3), 0b0101_0010);
+        let b = lanes([1.0, -2.0, 7.0, 0.5, -3.0, 0.0, 4.0, 2.5]);
+        assert_eq!((b.min_element(), b.max_element()), (-3.0, 7.0));
+        assert_eq!(b.max_of(0b1000_0011), 2.5);
+        assert_eq!(b.max_of(0b0100_0000), 4.0);
+        assert_eq!(b.max_of(0), f32::NEG_INFINITY);
+        assert_eq!(a.max_of(0b0001_0001), 1.0);
+        assert_eq!(a.max_of(0b0001_1001), f32::INFINITY);
+        assert_eq!(Lanes::from_array(b.to_array()), b);
     }
 
     /// The integer forms agree with the float ones wherever one operand is
