@@ -591,7 +591,12 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let m = child_rays(bt, f, node, i, active, tmax);
+                // Each ray's own test for inner children too: shadow
+                // rays from eight surface points make loose packet
+                // bounds, and the rays a child keeps prune its subtree
+                // (callgrind, every 32nd packet: sphere1m's shadow rays
+                // 14% fewer instructions, bunny40k's 3% more).
+                let m = f.rays_into(bt, node, i, tmax) & active;
                 if m == 0 {
                     continue;
                 }
