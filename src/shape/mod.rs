@@ -13,6 +13,7 @@ mod transformed;
 mod triangle;
 mod triangle4;
 mod triangle4_avx;
+mod triangle8_avx;
 
 pub use moving::Moving;
 pub use plane::Plane;
@@ -25,6 +26,9 @@ pub use triangle4::{may_hit4, RaySpace4, WatertightRay4};
 #[cfg(target_arch = "x86_64")]
 pub use triangle4_avx::hit4_avx;
 pub use triangle4_avx::Hits4;
+#[cfg(target_arch = "x86_64")]
+pub use triangle8_avx::hit8_avx;
+pub use triangle8_avx::{Hits8, WatertightRay8, F8};
 
 use crate::math::{Aabb, Ray, SurfacePoint};
 

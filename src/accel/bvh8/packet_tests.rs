@@ -256,6 +256,9 @@ fn the_packet_box_test_keeps_every_box_its_rays_keep() {
     use crate::accel::bvh8::traverse::{Portable, RayData, ANY_OCTANT};
     let mut r = Rng::new(21);
     let (mut kept, mut packets) = (0, 0);
+    #[cfg(target_arch = "x86_64")]
+    let avx =
+        crate::testdata::avx2_fma("the_packet_box_test_keeps_every_box_its_rays_keep (AVX part)");
     for k in 0..4000 {
         let mut node = Node::EMPTY;
         for i in 0..W {
@@ -289,7 +292,24 @@ fn the_packet_box_test_keeps_every_box_its_rays_keep() {
         for (i, q) in rays.iter().enumerate() {
             tmax[i] = q.tmax;
         }
-        let (mask, dist) = f.boxes(&node, tmax.max_of(walked));
+        let (mask, dist) = f.boxes(Portable, &node, tmax.max_of(walked));
+        // The AVX form answers as the portable one, bit for bit.
+        #[cfg(target_arch = "x86_64")]
+        if avx {
+            // SAFETY: `avx` says the CPU has AVX2 and FMA.
+            let a = unsafe { crate::accel::bvh8::traverse::Avx::new() };
+            let (m, d) = f.boxes(a, &node, tmax.max_of(walked));
+            assert_eq!(
+                (m, d.to_array().map(f32::to_bits)),
+                (mask, dist.to_array().map(f32::to_bits))
+            );
+            for c in 0..W {
+                assert_eq!(
+                    f.rays_into(a, &node, c, tmax),
+                    f.rays_into(Portable, &node, c, tmax)
+                );
+            }
+        }
         for (i, q) in rays.iter().enumerate() {
             let rd = RayData::new(&q.ray);
             let (own, d) = rd.boxes::<_, ANY_OCTANT, true>(
@@ -302,11 +322,131 @@ fn the_packet_box_test_keeps_every_box_its_rays_keep() {
             for c in 0..W {
                 if own >> c & 1 != 0 {
                     assert!(dist[c] <= d[c], "packet {k} ray {i} box {c}");
-                    assert!(f.rays_into(&node, c, tmax) >> i & 1 != 0);
+                    assert!(f.rays_into(Portable, &node, c, tmax) >> i & 1 != 0);
                     kept += 1;
                 }
             }
         }
     }
     assert!(packets > 1000 && kept > 500, "{packets} {kept}");
+}
+
+/// The dominant axis of `d`, as the watertight test picks it (its `kz`).
+fn dominant_axis(d: Vec3) -> usize {
+    let a = d.abs();
+    if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    }
+}
+
+/// Camera tiles looking along a diagonal of the terrain, so that within a
+/// tile some rays' dominant axis is x and others' z: the leaf test takes
+/// each axis's rays apart, and every ray still gets its own hit.
+#[test]
+fn packets_whose_rays_differ_in_dominant_axis_agree() {
+    let prims = terrain();
+    let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
+    let eye = Vec3::new(-20.0, 25.0, -20.0);
+    let (right, up) = (Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 0.0));
+    let cam = |x: usize, y: usize| {
+        let d = Vec3::new(1.0, -0.45, 1.0)
+            + right * ((x as f32 - 30.0) * 0.004 + 1e-4)
+            + up * ((y as f32 - 24.0) * -0.004);
+        crate::math::Ray::new(eye, d)
+    };
+    let (mut packets, mut mixed) = (Vec::new(), 0);
+    for ty in (0..48).step_by(2) {
+        for tx in (0..64).step_by(4) {
+            let p: Vec<PacketRay> = (0..PACKET)
+                .map(|l| pr(cam(tx + l % 4, ty + l / 4), 0.0, f32::INFINITY))
+                .collect();
+            let axes = p
+                .iter()
+                .fold(0u32, |m, q| m | 1 << dominant_axis(q.ray.dir));
+            if axes.count_ones() > 1 {
+                assert!(Frustum::new(&p).0.is_some(), "walked as a packet");
+                mixed += 1;
+            }
+            packets.push(p);
+        }
+    }
+    assert!(mixed >= 16, "{mixed}");
+    let hits = assert_packets_agree(&b, &prims, &packets);
+    assert!(hits > 64 * 48 / 2, "{hits}");
+}
+
+/// A ray with a NaN `tmax` in a packet: it hits nothing, as alone, and
+/// the packet's other rays get their own hits (the packet's bound on its
+/// `tmax` counts the NaN as `+inf`).
+#[test]
+fn a_nan_tmax_leaves_the_other_rays_of_a_packet_alone() {
+    let prims = terrain();
+    let b = Bvh8::new(&prims, (0..prims.len() as u32).collect());
+    let eye = Vec3::new(32.0, 40.0, -20.0);
+    let mut packets = Vec::new();
+    for k in 0..64 {
+        let p: Vec<PacketRay> = (0..PACKET)
+            .map(|l| {
+                let d = Vec3::new((l as f32 + 8.0 * (k % 8) as f32) / 40.0 - 0.8, -1.0, 1.0);
+                let tmax = if l == k % PACKET {
+                    f32::NAN
+                } else {
+                    f32::INFINITY
+                };
+                pr(crate::math::Ray::new(eye, d), 0.0, tmax)
+            })
+            .collect();
+        packets.push(p);
+    }
+    let hits = assert_packets_agree(&b, &prims, &packets);
+    assert_eq!(hits, 64 * (PACKET - 1));
+}
+
+/// The packet's `1 / d` and `origin · inv`, eight rays at a time, are the
+/// single ray's (`RayData::inv_oi`) bit for bit, for tiny, zero, signed
+/// zero, infinite and NaN components too.
+#[test]
+fn the_packet_inverse_is_the_single_rays() {
+    use crate::accel::bvh8::lanes::Lanes;
+    use crate::accel::bvh8::traverse::RayData;
+    let mut r = Rng::new(5);
+    let special = [
+        0.0,
+        -0.0,
+        1e-20,
+        -1e-19,
+        1e-18,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        1e30,
+        -3.5,
+    ];
+    for k in 0..2000 {
+        let rays: Vec<crate::math::Ray> = (0..8)
+            .map(|l| {
+                let mut d = r.v(-2.0, 2.0);
+                let mut o = r.v(-1e3, 1e3);
+                if (k + l) % 3 == 0 {
+                    d[(k + l) % 3] = special[(k * 7 + l) % special.len()];
+                    o[l % 3] = special[(k + 3 * l) % special.len()];
+                }
+                crate::math::Ray::new(o, d)
+            })
+            .collect();
+        for a in 0..3 {
+            let d = Lanes::from_array(std::array::from_fn(|l| rays[l].dir[a]));
+            let o = Lanes::from_array(std::array::from_fn(|l| rays[l].origin[a]));
+            let (inv, oi) = RayData::inv_oi_lanes(d, o);
+            for (l, q) in rays.iter().enumerate() {
+                let (want_inv, want_oi) = RayData::inv_oi(q);
+                assert_eq!(inv[l].to_bits(), want_inv[a].to_bits(), "{q:?}");
+                assert_eq!(oi[l].to_bits(), want_oi[a].to_bits(), "{q:?}");
+            }
+        }
+    }
 }

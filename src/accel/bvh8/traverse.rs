@@ -224,6 +224,19 @@ impl RayData {
         (inv, ray.origin * inv)
     }
 
+    /// [`inv_oi`](Self::inv_oi) of eight rays at once, one lane per ray
+    /// (`d` and `o` their directions' and origins' components per axis):
+    /// the same operations ([`safe_inverse`]'s `abs`, `maxps`, `copysign`
+    /// and division, then the product) on four lanes at a time, so the
+    /// same values.
+    #[inline(always)]
+    pub(crate) fn inv_oi_lanes(d: Lanes, o: Lanes) -> (Lanes, Lanes) {
+        let tiny = Vec4::splat(1e-18);
+        let inv = |d: Vec4| Vec4::ONE / d.abs().max(tiny).copysign(d);
+        let inv = Lanes([inv(d.0[0]), inv(d.0[1])]);
+        (inv, Lanes([o.0[0] * inv.0[0], o.0[1] * inv.0[1]]))
+    }
+
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         let (inv, oi) = Self::inv_oi(ray);
@@ -543,7 +556,7 @@ impl BoxTest for Avx {
 /// The lanes of a block that hold triangles (not [`OTHER`] items, not unused:
 /// [`NO_ITEM`] has the flag too).
 #[inline(always)]
-fn triangle_lanes(b: &Tri4) -> u32 {
+pub(crate) fn triangle_lanes(b: &Tri4) -> u32 {
     // Both flags are the id's top bit: the lanes whose id, read as an f32,
     // has its sign bit clear (one `movmskps`; no arithmetic on the bits).
     const _: () = assert!(OTHER == 1 << 31 && NO_ITEM & OTHER != 0);
@@ -680,7 +693,7 @@ impl Nearest {
 
     /// Keeps hit `(t, id)` if it is [`closer`](Self::closer).
     #[inline(always)]
-    fn offer(&mut self, t: f32, id: u32, bary: Option<[f32; 3]>) {
+    pub(crate) fn offer(&mut self, t: f32, id: u32, bary: Option<[f32; 3]>) {
         if self.closer(t, id) {
             self.tmax = t;
             self.best = Some(Closest { t, id, bary });
