@@ -16,6 +16,7 @@ use crate::accel::overlap::margin;
 use crate::math::{Aabb, Vec3};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 
 #[path = "build_partition.rs"]
 mod partition;
@@ -176,6 +177,8 @@ pub(crate) struct Built {
     pub nodes: Vec<Node>,
     pub tris: Vec<Tri4>,
     pub bounds: Aabb,
+    /// Node levels ([`depth`] of `nodes`).
+    pub depth: usize,
 }
 
 /// Builds the tree over every item of `src`.
@@ -209,11 +212,13 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
             nodes: Vec::new(),
             tris: Vec::new(),
             bounds: Aabb::EMPTY,
+            depth: 0,
         };
     }
     let builder = Builder {
         pad: Vec3::splat(margin(&bounds)),
         wide: refs.len() <= WIDE_ITEMS,
+        deepest: AtomicUsize::new(0),
     };
     let all = Range {
         begin: 0,
@@ -232,12 +237,16 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
         let mut node = Node::EMPTY;
         builder.set_child(&mut node, 0, root, &all);
         nodes.push(node);
+        builder.deeper(1);
     }
+    let depth = builder.deepest.into_inner();
+    debug_assert_eq!(depth, self::depth(&nodes));
     let tris = fill_leaves(&mut nodes, &refs, src);
     Built {
         nodes,
         tris,
         bounds,
+        depth,
     }
 }
 
@@ -632,6 +641,8 @@ struct Builder {
     pad: Vec3,
     /// Whether small ranges may become wide nodes ([`WIDE_ITEMS`]).
     wide: bool,
+    /// The deepest node level built so far (see [`depth`]).
+    deepest: AtomicUsize,
 }
 
 impl Builder {
@@ -977,7 +988,7 @@ impl Builder {
     fn subtree_of(
         &self,
         refs: &mut [PrimRef],
-        mut part: Part,
+        part: Part,
         depth: usize,
         out: &mut Vec<Node>,
     ) -> u32 {
@@ -986,11 +997,39 @@ impl Builder {
             return leaf(r.begin, 1);
         }
         // (On one thread the parallel path would only add copies.)
-        let parallel = r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1;
-        if parallel {
-            self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS);
+        if r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1 {
+            let laid = self.parallel_subtree(refs, part, depth);
+            let at = out.len();
+            lay_out(&laid, out);
+            return at as u32;
         }
-        // Up to W children: split the largest child that wants splitting.
+        let (kids, len) = self.children(refs, part, depth);
+        let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
+        let at = out.len();
+        out.push(Node::EMPTY);
+        let mut node = Node::EMPTY;
+        for (i, k) in kids.enumerate() {
+            let kr = k.r;
+            let sub = refs_of(refs, &r, &kr);
+            let c = self.subtree_of(sub, k, depth + 1, out);
+            self.set_child(&mut node, i, c, &kr);
+        }
+        self.deeper(depth + 1);
+        out[at] = node;
+        at as u32
+    }
+
+    /// The node of `part` at node level `depth` (its range divides) and
+    /// its children's ranges: the node's binary levels divided, the
+    /// largest child that divides first, until it has `W` children or
+    /// none divides. Returns them in order, and how many.
+    fn children(
+        &self,
+        refs: &mut [PrimRef],
+        part: Part,
+        depth: usize,
+    ) -> ([Option<Part>; W], usize) {
+        let r = part.r;
         // (On the stack: a vector here was an allocation per node.)
         let mut all: [Option<Part>; W] = Default::default();
         let (a, b) = self.halves(refs, part, depth + 1, true);
@@ -1014,67 +1053,158 @@ impl Builder {
             (all[i], all[i + 1]) = (Some(a), Some(b));
             len += 1;
         }
-        let kids = all.into_iter().take(len).map(|k| k.expect("filled"));
-        let at = out.len();
-        out.push(Node::EMPTY);
-        let mut node = Node::EMPTY;
-        if parallel {
-            // Children in parallel, each into its own array, then appended
-            // with their node indices shifted.
-            let mut slices = Vec::with_capacity(W);
-            let mut rest = &mut *refs;
-            let mut base = r.begin;
-            for k in kids {
-                let (mine, tail) = rest.split_at_mut(k.r.end - base);
-                let begin = k.r.begin - base;
-                base = k.r.end;
-                slices.push((&mut mine[begin..], k));
-                rest = tail;
-            }
-            let subs: Vec<(u32, Range, Vec<Node>)> = slices
-                .into_par_iter()
-                .map(|(s, k)| {
-                    let mut v = Vec::with_capacity(s.len() / 8 + 1);
-                    let kr = k.r;
-                    let c = self.subtree_of(s, k, depth + 1, &mut v);
-                    (c, kr, v)
-                })
-                .collect();
-            // Appended on all threads: node `g` of the children's nodes
-            // (laid out one child's after another) comes from the child
-            // whose nodes start at or before it, shifted by where they land.
-            let mut starts = Vec::with_capacity(subs.len() + 1);
-            let mut total = 0;
-            for (c, k, v) in &subs {
-                starts.push(total);
-                let shift = (out.len() + total) as u32;
-                let c = if is_leaf(*c) { *c } else { c + shift };
-                self.set_child(&mut node, starts.len() - 1, c, k);
-                total += v.len();
-            }
-            let base = out.len();
-            out.par_extend((0..total).into_par_iter().with_min_len(1024).map(|g| {
-                let i = starts.partition_point(|&s| s <= g) - 1;
-                let shift = (base + starts[i]) as u32;
-                let mut n = subs[i].2[g - starts[i]];
-                for ch in &mut n.child {
-                    if !is_leaf(*ch) {
-                        *ch += shift;
-                    }
-                }
-                n
-            }));
-        } else {
-            for (i, k) in kids.enumerate() {
+        (all, len)
+    }
+
+    /// [`Builder::subtree_of`] on several threads, of a range that divides:
+    /// its binary levels divided ahead on all threads, then its children
+    /// built in parallel, each into an array of its own (or, if large, a
+    /// [`Laid`] of its own), laid out in one array at the end.
+    fn parallel_subtree(&self, refs: &mut [PrimRef], mut part: Part, depth: usize) -> Laid {
+        let r = part.r;
+        self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS);
+        let (kids, len) = self.children(refs, part, depth);
+        let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
+        let mut slices = Vec::with_capacity(W);
+        let mut rest = &mut *refs;
+        let mut base = r.begin;
+        for k in kids {
+            let (mine, tail) = rest.split_at_mut(k.r.end - base);
+            let begin = k.r.begin - base;
+            base = k.r.end;
+            slices.push((&mut mine[begin..], k));
+            rest = tail;
+        }
+        let subs: Vec<(u32, Range, Laid)> = slices
+            .into_par_iter()
+            .map(|(s, k)| {
                 let kr = k.r;
-                let sub = refs_of(refs, &r, &kr);
-                let c = self.subtree_of(sub, k, depth + 1, out);
-                self.set_child(&mut node, i, c, &kr);
+                if k.plan.is_some() && kr.len() >= PARALLEL_ITEMS {
+                    (0, kr, self.parallel_subtree(s, k, depth + 1))
+                } else {
+                    // Built in this thread's scratch array, then copied
+                    // (from the cache) to one of the exact size: fresh
+                    // arrays of a guessed size took fresh pages.
+                    SCRATCH.with_borrow_mut(|v| {
+                        v.clear();
+                        let c = self.subtree_of(s, k, depth + 1, v);
+                        (c, kr, Laid::Flat(v.to_vec()))
+                    })
+                }
+            })
+            .collect();
+        // The children's nodes follow the node, one child's after another.
+        let mut node = Node::EMPTY;
+        let mut at = 1;
+        for (i, (c, k, laid)) in subs.iter().enumerate() {
+            let c = if is_leaf(*c) { *c } else { c + at as u32 };
+            self.set_child(&mut node, i, c, k);
+            at += laid.len();
+        }
+        self.deeper(depth + 1);
+        Laid::Parent {
+            node: Box::new(node),
+            kids: subs.into_iter().map(|(_, _, laid)| laid).collect(),
+            len: at,
+        }
+    }
+
+    /// Notes a node at level `level` (1: the root).
+    fn deeper(&self, level: usize) {
+        // Read first: the deepest level seldom changes, and a write per
+        // node would move the line between the threads.
+        if self.deepest.load(Relaxed) < level {
+            self.deepest.fetch_max(level, Relaxed);
+        }
+    }
+}
+
+thread_local! {
+    /// Where [`Builder::parallel_subtree`] builds a small child's nodes.
+    static SCRATCH: std::cell::RefCell<Vec<Node>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The nodes of a subtree whose children were built on several threads,
+/// each child's into an array of its own, before they are laid out in one
+/// array by [`lay_out`] (which copies each node once: appending each
+/// level's children to their parent's array copied every node once per
+/// level, and took fresh memory for each level's copy).
+enum Laid {
+    /// Nodes in order, their children's indices counted from the first.
+    Flat(Vec<Node>),
+    /// A node (its children's indices counted from its own place), then
+    /// its children's nodes, one child's after another: `len` nodes.
+    Parent {
+        node: Box<Node>,
+        kids: Vec<Laid>,
+        len: usize,
+    },
+}
+
+impl Laid {
+    fn len(&self) -> usize {
+        match self {
+            Laid::Flat(v) => v.len(),
+            Laid::Parent { len, .. } => *len,
+        }
+    }
+
+    /// The runs of nodes of `self`, laid out from `at`: (where the run
+    /// starts, its nodes). A node's children's indices count from the
+    /// start of its run.
+    fn runs<'a>(&'a self, at: usize, out: &mut Vec<(usize, &'a [Node])>) {
+        match self {
+            Laid::Flat(v) => {
+                if !v.is_empty() {
+                    out.push((at, v));
+                }
+            }
+            Laid::Parent { node, kids, .. } => {
+                out.push((at, std::slice::from_ref(&**node)));
+                let mut p = at + 1;
+                for k in kids {
+                    k.runs(p, out);
+                    p += k.len();
+                }
             }
         }
-        out[at] = node;
-        at as u32
     }
+}
+
+/// Appends the nodes of `laid` to `out`, their children's indices shifted
+/// to where they land, on all threads.
+fn lay_out(laid: &Laid, out: &mut Vec<Node>) {
+    let mut runs = Vec::new();
+    laid.runs(0, &mut runs);
+    let total = laid.len();
+    // The run holding node `g` is at or after `first[g / STEP]`, and a
+    // run is about a subtree of 2-4k items (hundreds of nodes): a step or
+    // two from there.
+    const STEP: usize = 256;
+    let mut first = Vec::with_capacity(total.div_ceil(STEP));
+    let mut i = 0;
+    for g in (0..total).step_by(STEP) {
+        while i + 1 < runs.len() && runs[i + 1].0 <= g {
+            i += 1;
+        }
+        first.push(i);
+    }
+    let base = out.len();
+    out.par_extend((0..total).into_par_iter().with_min_len(1024).map(|g| {
+        let mut i = first[g / STEP];
+        while i + 1 < runs.len() && runs[i + 1].0 <= g {
+            i += 1;
+        }
+        let (start, run) = runs[i];
+        let shift = (base + start) as u32;
+        let mut n = run[g - start];
+        for ch in &mut n.child {
+            if !is_leaf(*ch) {
+                *ch += shift;
+            }
+        }
+        n
+    }));
 }
 
 /// The items of `k` within `refs`, which holds the items of `r`.
