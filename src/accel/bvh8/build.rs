@@ -184,10 +184,9 @@ pub(crate) struct Built {
 /// Builds the tree over every item of `src`.
 pub(crate) fn build<S: Source>(src: &S) -> Built {
     let n = src.count();
-    assert!(
-        n < 1 << 28 && (0..n).all(|k| src.id(k) & OTHER == 0),
-        "the fast BVH holds fewer than 2^28 primitives, with ids below 2^31 (got {n})"
-    );
+    let too_many =
+        || format!("the fast BVH holds fewer than 2^28 primitives, with ids below 2^31 (got {n})");
+    assert!(n < 1 << 28, "{}", too_many());
     // An indexed map writes straight into the vector (a filtering
     // collect would gather pieces and copy them); skipped items are
     // dropped afterwards in place.
@@ -195,6 +194,7 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
     huge_pages(&refs);
     refs.par_extend((0..n).into_par_iter().with_min_len(4096).map(|k| {
         let id = src.id(k);
+        assert!(id & OTHER == 0, "{}", too_many());
         match src.item(id) {
             Item::Triangle(v) => PrimRef::new(&Aabb::from_points(v), id, false),
             Item::Other(b) => PrimRef::new(&b, id, true),
