@@ -832,11 +832,32 @@ impl Builder {
 
     /// Divides `r` (its items are `refs`, which starts at `r.begin`) by
     /// `plan` into two non-empty ranges with their bounds.
+    #[cfg(test)]
     fn divide(&self, refs: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
+        self.divide_among(refs, r, plan, 1)
+    }
+
+    /// [`Builder::divide`] by a task that shares the threads with up to
+    /// `tasks − 1` others: a large range is partitioned on all threads
+    /// while there are fewer tasks than threads (else the others keep them
+    /// busy, and the serial loop is cheaper: the parallel partition reads
+    /// the items that change sides twice), or when it is very large.
+    fn divide_among(
+        &self,
+        refs: &mut [PrimRef],
+        r: &Range,
+        plan: Plan,
+        tasks: usize,
+    ) -> (Range, Range) {
+        let n = refs.len();
+        let threads = rayon::current_num_threads();
+        let parallel = threads > 1
+            && n >= PARALLEL_PARTITION
+            && (tasks < threads || n >= SHARED_PARALLEL_PARTITION);
         let (mid, (lb, lc), (rb, rc)) = match plan {
             Plan::Bin {
                 axis, pos, bins, ..
-            } => partition(refs, left_of(r, axis, pos, bins)),
+            } => partition(refs, left_of(r, axis, pos, bins), parallel),
             Plan::Median { axis } => {
                 let axis = axis as usize;
                 let mid = refs.len() / 2;
@@ -902,7 +923,14 @@ impl Builder {
     /// within a wide node when the plan that divides `p` is wide or `p`
     /// itself is within one (not past the node: a root's halves are
     /// within a wide node only by its own plan).
-    fn halves(&self, items: &mut [PrimRef], p: Part, depth: usize, root: bool) -> (Part, Part) {
+    fn halves(
+        &self,
+        items: &mut [PrimRef],
+        p: Part,
+        depth: usize,
+        root: bool,
+        tasks: usize,
+    ) -> (Part, Part) {
         let by = if root { p.plan } else { p.split };
         let by = by.expect("a range that divides");
         let wide = by.wide() || (p.wide && !root);
@@ -913,7 +941,7 @@ impl Builder {
                 *h
             }
             None => {
-                let (a, b) = self.divide(items, &p.r, by);
+                let (a, b) = self.divide_among(items, &p.r, by, tasks);
                 let (pa, pb) = self.plans(items, &a, &b, depth);
                 if wide {
                     let (ia, ib) = items.split_at(a.len());
@@ -946,7 +974,14 @@ impl Builder {
     /// and when. The plans are made for `depth` and used perhaps a few
     /// levels deeper: only ranges whose plan is the same at every one of
     /// those levels are divided ahead (see [`forced`]).
-    fn expand(&self, items: &mut [PrimRef], p: &mut Part, depth: usize, levels: usize) {
+    fn expand(
+        &self,
+        items: &mut [PrimRef],
+        p: &mut Part,
+        depth: usize,
+        levels: usize,
+        tasks: usize,
+    ) {
         let n = p.r.len();
         if levels == 0
             || n < SPECULATE_ITEMS
@@ -957,15 +992,15 @@ impl Builder {
         }
         if p.halves.is_none() {
             let plan = p.plan.expect("checked");
-            let (a, b) = self.divide(items, &p.r, plan);
+            let (a, b) = self.divide_among(items, &p.r, plan, tasks);
             let (pa, pb) = self.plans(items, &a, &b, depth);
             p.halves = Some(Box::new((Part::new(a, pa, depth), Part::new(b, pb, depth))));
         }
         let (a, b) = &mut **p.halves.as_mut().expect("just made");
         let (ia, ib) = items.split_at_mut(a.r.len());
         rayon::join(
-            || self.expand(ia, a, depth, levels - 1),
-            || self.expand(ib, b, depth, levels - 1),
+            || self.expand(ia, a, depth, levels - 1, 2 * tasks),
+            || self.expand(ib, b, depth, levels - 1, 2 * tasks),
         );
     }
 
@@ -998,12 +1033,12 @@ impl Builder {
         }
         // (On one thread the parallel path would only add copies.)
         if r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1 {
-            let laid = self.parallel_subtree(refs, part, depth);
+            let laid = self.parallel_subtree(refs, part, depth, 1);
             let at = out.len();
             lay_out(&laid, out);
             return at as u32;
         }
-        let (kids, len) = self.children(refs, part, depth);
+        let (kids, len) = self.children(refs, part, depth, 1);
         let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
         let at = out.len();
         out.push(Node::EMPTY);
@@ -1028,11 +1063,12 @@ impl Builder {
         refs: &mut [PrimRef],
         part: Part,
         depth: usize,
+        tasks: usize,
     ) -> ([Option<Part>; W], usize) {
         let r = part.r;
         // (On the stack: a vector here was an allocation per node.)
         let mut all: [Option<Part>; W] = Default::default();
-        let (a, b) = self.halves(refs, part, depth + 1, true);
+        let (a, b) = self.halves(refs, part, depth + 1, true, tasks);
         (all[0], all[1]) = (Some(a), Some(b));
         let mut len = 2;
         while len < W {
@@ -1045,7 +1081,7 @@ impl Builder {
             let Some(i) = pick else { break };
             let k = all[i].take().expect("filled");
             let kr = k.r;
-            let (a, b) = self.halves(refs_of(refs, &r, &kr), k, depth + 1, false);
+            let (a, b) = self.halves(refs_of(refs, &r, &kr), k, depth + 1, false, tasks);
             // `a` and `b` take `k`'s place, in order.
             for j in (i + 1..len).rev() {
                 all[j + 1] = all[j].take();
@@ -1060,10 +1096,16 @@ impl Builder {
     /// its binary levels divided ahead on all threads, then its children
     /// built in parallel, each into an array of its own (or, if large, a
     /// [`Laid`] of its own), laid out in one array at the end.
-    fn parallel_subtree(&self, refs: &mut [PrimRef], mut part: Part, depth: usize) -> Laid {
+    fn parallel_subtree(
+        &self,
+        refs: &mut [PrimRef],
+        mut part: Part,
+        depth: usize,
+        tasks: usize,
+    ) -> Laid {
         let r = part.r;
-        self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS);
-        let (kids, len) = self.children(refs, part, depth);
+        self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS, tasks);
+        let (kids, len) = self.children(refs, part, depth, tasks);
         let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
         let mut slices = Vec::with_capacity(W);
         let mut rest = &mut *refs;
@@ -1075,12 +1117,13 @@ impl Builder {
             slices.push((&mut mine[begin..], k));
             rest = tail;
         }
+        let tasks = tasks * slices.len();
         let subs: Vec<(u32, Range, Laid)> = slices
             .into_par_iter()
             .map(|(s, k)| {
                 let kr = k.r;
                 if k.plan.is_some() && kr.len() >= PARALLEL_ITEMS {
-                    (0, kr, self.parallel_subtree(s, k, depth + 1))
+                    (0, kr, self.parallel_subtree(s, k, depth + 1, tasks))
                 } else {
                     // Built in this thread's scratch array, then copied
                     // (from the cache) to one of the exact size: fresh

@@ -64,15 +64,21 @@ pub(super) const BLOCK: usize = 64;
 /// the cached range); otherwise (long runs, as in a mesh stored in order,
 /// or a range too large for the cache) the in-place loop gathers the
 /// bounds in the same pass. Measured (build, 1 thread): bunny40k 7-9%
-/// faster, the spheres (stored in order) within 2%. Large ranges, given
-/// several threads, go to [`parallel_partition`], which gives the in-place
-/// loop's permutation.
+/// faster, the spheres (stored in order) within 2%. `parallel`: the range
+/// goes to [`parallel_partition`], which gives the in-place loop's
+/// permutation (for ranges of at least `PARALLEL_PARTITION` items only:
+/// below, the serial ways may differ from it).
 pub(super) fn partition(
     v: &mut [PrimRef],
     left: impl Fn(Vec3A) -> bool + Sync,
+    parallel: bool,
 ) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
     let n = v.len();
-    if n >= PARALLEL_PARTITION && rayon::current_num_threads() > 1 {
+    if parallel {
+        assert!(
+            n >= PARALLEL_PARTITION,
+            "the parallel partition of a small range"
+        );
         return parallel_partition(v, left);
     }
     if (2 * BLOCK..=BLOCK_PARTITION_MAX).contains(&n) && side_changes(&v[..BLOCK / 2], &left) >= 4 {
@@ -201,8 +207,12 @@ pub(super) fn block_partition(v: &mut [PrimRef], left: &impl Fn(Vec3A) -> bool) 
 }
 
 /// Ranges of at least this many items are partitioned on several threads
-/// (when there are several).
+/// (when there are several, and fewer tasks than threads to keep them
+/// busy).
 pub(super) const PARALLEL_PARTITION: usize = 32 * 1024;
+/// Ranges of at least this many items are partitioned on several threads
+/// whatever else runs.
+pub(super) const SHARED_PARALLEL_PARTITION: usize = 256 * 1024;
 /// Items per task of [`parallel_partition`]'s passes (a multiple of 64:
 /// each task owns whole words of the side bits).
 const PARALLEL_CHUNK: usize = 8 * 1024;

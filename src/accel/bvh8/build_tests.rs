@@ -335,7 +335,7 @@ fn partition_separates_and_bounds_both_sides() {
             }
             for cut in [-1.0, 0.1, 0.3, 0.5, 0.9, 2.0] {
                 let mut v = items.clone();
-                let (k, lb, rb) = partition(&mut v, |c| c.x < cut);
+                let (k, lb, rb) = partition(&mut v, |c| c.x < cut, false);
                 assert_eq!(k, items.iter().filter(|p| p.centroid().x < cut).count());
                 assert!(v[..k].iter().all(|p| p.centroid().x < cut));
                 assert!(v[k..].iter().all(|p| p.centroid().x >= cut));
