@@ -52,6 +52,17 @@ pub enum MeshError {
 /// Vertices or triangles checked per task of [`MeshScene::new`].
 const CHECK_CHUNK: usize = 16 * 1024;
 
+/// The index of the first item of `items` that is `bad`, checked in
+/// chunks on all threads (each chunk a plain loop: rayon's search by item
+/// checks whether to stop at every item).
+fn first<T: Sync>(items: &[T], bad: impl Fn(&T) -> bool + Sync) -> Option<usize> {
+    let chunk = items
+        .par_chunks(CHECK_CHUNK)
+        .position_first(|c| c.iter().any(&bad))?;
+    let at = chunk * CHECK_CHUNK;
+    Some(at + items[at..].iter().position(&bad).expect("in this chunk"))
+}
+
 /// A triangle mesh ready for ray queries. It keeps its own copy of the
 /// triangles (in the BVH's leaf blocks), so the caller's buffers may be
 /// dropped after [`MeshScene::new`].
@@ -70,22 +81,15 @@ impl MeshScene {
         if indices.len() >= 1 << 28 {
             return Err(MeshError::TooLarge(indices.len()));
         }
-        // On all threads (a serial pass was a millisecond of the
-        // 2-thread build of a 1M-triangle mesh); the first offender, as
-        // one pass in order finds it.
-        let bad_vertex = vertices
-            .par_iter()
-            .with_min_len(CHECK_CHUNK)
-            .position_first(|&v| !v.into().is_finite());
-        if let Some(i) = bad_vertex {
+        // On all threads, chunk by chunk (a serial pass was a millisecond
+        // of the 2-thread build of a 1M-triangle mesh); the first
+        // offender, as one pass in order finds it.
+        let bad_vertex = |v: &V| !(*v).into().is_finite();
+        if let Some(i) = first(vertices, bad_vertex) {
             return Err(MeshError::NotFinite(i));
         }
         let out_of_range = |t: &[u32; 3]| t.iter().copied().find(|&i| i as usize >= vertices.len());
-        let bad_triangle = indices
-            .par_iter()
-            .with_min_len(CHECK_CHUNK)
-            .position_first(|t| out_of_range(t).is_some());
-        if let Some(triangle) = bad_triangle {
+        if let Some(triangle) = first(indices, |t| out_of_range(t).is_some()) {
             return Err(MeshError::IndexOutOfRange {
                 triangle,
                 index: out_of_range(&indices[triangle]).expect("found out of range"),

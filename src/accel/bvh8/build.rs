@@ -862,10 +862,11 @@ impl Builder {
         tasks: usize,
     ) -> (Range, Range) {
         let n = refs.len();
-        let threads = rayon::current_num_threads();
-        let parallel = threads > 1
-            && n >= PARALLEL_PARTITION
-            && (tasks < threads || n >= SHARED_PARALLEL_PARTITION);
+        // (The thread count only for large ranges: most are small.)
+        let parallel = n >= PARALLEL_PARTITION && {
+            let threads = rayon::current_num_threads();
+            threads > 1 && (tasks < threads || n >= SHARED_PARALLEL_PARTITION)
+        };
         let (mid, (lb, lc), (rb, rc)) = match plan {
             Plan::Bin {
                 axis, pos, bins, ..
