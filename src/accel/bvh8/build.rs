@@ -16,6 +16,7 @@ use crate::accel::overlap::margin;
 use crate::math::{Aabb, Vec3};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 
 #[path = "build_partition.rs"]
 mod partition;
@@ -135,6 +136,18 @@ impl PrimRef {
     fn other(&self) -> bool {
         self.hi.w as u32 & Self::OTHER_W != 0
     }
+
+    /// Keeps `v` in the lower corner's `x`, once the tree is built and
+    /// the box no longer needed (its bits as they are: only moved, never
+    /// computed with). The id and kind stay readable.
+    fn set_note(&mut self, v: u32) {
+        self.lo.x = f32::from_bits(v);
+    }
+
+    /// What [`PrimRef::set_note`] kept.
+    fn note(&self) -> u32 {
+        self.lo.x.to_bits()
+    }
 }
 
 /// A contiguous range of references: its bounds, its centroids' bounds.
@@ -176,15 +189,16 @@ pub(crate) struct Built {
     pub nodes: Vec<Node>,
     pub tris: Vec<Tri4>,
     pub bounds: Aabb,
+    /// Node levels ([`depth`] of `nodes`).
+    pub depth: usize,
 }
 
 /// Builds the tree over every item of `src`.
 pub(crate) fn build<S: Source>(src: &S) -> Built {
     let n = src.count();
-    assert!(
-        n < 1 << 28 && (0..n).all(|k| src.id(k) & OTHER == 0),
-        "the fast BVH holds fewer than 2^28 primitives, with ids below 2^31 (got {n})"
-    );
+    let too_many =
+        || format!("the fast BVH holds fewer than 2^28 primitives, with ids below 2^31 (got {n})");
+    assert!(n < 1 << 28, "{}", too_many());
     // An indexed map writes straight into the vector (a filtering
     // collect would gather pieces and copy them); skipped items are
     // dropped afterwards in place.
@@ -192,6 +206,7 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
     huge_pages(&refs);
     refs.par_extend((0..n).into_par_iter().with_min_len(4096).map(|k| {
         let id = src.id(k);
+        assert!(id & OTHER == 0, "{}", too_many());
         match src.item(id) {
             Item::Triangle(v) => PrimRef::new(&Aabb::from_points(v), id, false),
             Item::Other(b) => PrimRef::new(&b, id, true),
@@ -209,11 +224,13 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
             nodes: Vec::new(),
             tris: Vec::new(),
             bounds: Aabb::EMPTY,
+            depth: 0,
         };
     }
     let builder = Builder {
         pad: Vec3::splat(margin(&bounds)),
         wide: refs.len() <= WIDE_ITEMS,
+        deepest: AtomicUsize::new(0),
     };
     let all = Range {
         begin: 0,
@@ -232,12 +249,16 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
         let mut node = Node::EMPTY;
         builder.set_child(&mut node, 0, root, &all);
         nodes.push(node);
+        builder.deeper(1);
     }
-    let tris = fill_leaves(&mut nodes, &refs, src);
+    let depth = builder.deepest.into_inner();
+    debug_assert_eq!(depth, self::depth(&nodes));
+    let tris = fill_leaves(&mut nodes, &mut refs, src);
     Built {
         nodes,
         tris,
         bounds,
+        depth,
     }
 }
 
@@ -632,6 +653,8 @@ struct Builder {
     pad: Vec3,
     /// Whether small ranges may become wide nodes ([`WIDE_ITEMS`]).
     wide: bool,
+    /// The deepest node level built so far (see [`depth`]).
+    deepest: AtomicUsize,
 }
 
 impl Builder {
@@ -821,11 +844,33 @@ impl Builder {
 
     /// Divides `r` (its items are `refs`, which starts at `r.begin`) by
     /// `plan` into two non-empty ranges with their bounds.
+    #[cfg(test)]
     fn divide(&self, refs: &mut [PrimRef], r: &Range, plan: Plan) -> (Range, Range) {
+        self.divide_among(refs, r, plan, 1)
+    }
+
+    /// [`Builder::divide`] by a task that shares the threads with up to
+    /// `tasks − 1` others: a large range is partitioned on all threads
+    /// while there are fewer tasks than threads (else the others keep them
+    /// busy, and the serial loop is cheaper: the parallel partition reads
+    /// the items that change sides twice), or when it is very large.
+    fn divide_among(
+        &self,
+        refs: &mut [PrimRef],
+        r: &Range,
+        plan: Plan,
+        tasks: usize,
+    ) -> (Range, Range) {
+        let n = refs.len();
+        // (The thread count only for large ranges: most are small.)
+        let parallel = n >= PARALLEL_PARTITION && {
+            let threads = rayon::current_num_threads();
+            threads > 1 && (tasks < threads || n >= SHARED_PARALLEL_PARTITION)
+        };
         let (mid, (lb, lc), (rb, rc)) = match plan {
             Plan::Bin {
                 axis, pos, bins, ..
-            } => partition(refs, left_of(r, axis, pos, bins)),
+            } => partition(refs, left_of(r, axis, pos, bins), parallel),
             Plan::Median { axis } => {
                 let axis = axis as usize;
                 let mid = refs.len() / 2;
@@ -891,7 +936,14 @@ impl Builder {
     /// within a wide node when the plan that divides `p` is wide or `p`
     /// itself is within one (not past the node: a root's halves are
     /// within a wide node only by its own plan).
-    fn halves(&self, items: &mut [PrimRef], p: Part, depth: usize, root: bool) -> (Part, Part) {
+    fn halves(
+        &self,
+        items: &mut [PrimRef],
+        p: Part,
+        depth: usize,
+        root: bool,
+        tasks: usize,
+    ) -> (Part, Part) {
         let by = if root { p.plan } else { p.split };
         let by = by.expect("a range that divides");
         let wide = by.wide() || (p.wide && !root);
@@ -902,7 +954,7 @@ impl Builder {
                 *h
             }
             None => {
-                let (a, b) = self.divide(items, &p.r, by);
+                let (a, b) = self.divide_among(items, &p.r, by, tasks);
                 let (pa, pb) = self.plans(items, &a, &b, depth);
                 if wide {
                     let (ia, ib) = items.split_at(a.len());
@@ -935,7 +987,14 @@ impl Builder {
     /// and when. The plans are made for `depth` and used perhaps a few
     /// levels deeper: only ranges whose plan is the same at every one of
     /// those levels are divided ahead (see [`forced`]).
-    fn expand(&self, items: &mut [PrimRef], p: &mut Part, depth: usize, levels: usize) {
+    fn expand(
+        &self,
+        items: &mut [PrimRef],
+        p: &mut Part,
+        depth: usize,
+        levels: usize,
+        tasks: usize,
+    ) {
         let n = p.r.len();
         if levels == 0
             || n < SPECULATE_ITEMS
@@ -946,15 +1005,15 @@ impl Builder {
         }
         if p.halves.is_none() {
             let plan = p.plan.expect("checked");
-            let (a, b) = self.divide(items, &p.r, plan);
+            let (a, b) = self.divide_among(items, &p.r, plan, tasks);
             let (pa, pb) = self.plans(items, &a, &b, depth);
             p.halves = Some(Box::new((Part::new(a, pa, depth), Part::new(b, pb, depth))));
         }
         let (a, b) = &mut **p.halves.as_mut().expect("just made");
         let (ia, ib) = items.split_at_mut(a.r.len());
         rayon::join(
-            || self.expand(ia, a, depth, levels - 1),
-            || self.expand(ib, b, depth, levels - 1),
+            || self.expand(ia, a, depth, levels - 1, 2 * tasks),
+            || self.expand(ib, b, depth, levels - 1, 2 * tasks),
         );
     }
 
@@ -977,7 +1036,7 @@ impl Builder {
     fn subtree_of(
         &self,
         refs: &mut [PrimRef],
-        mut part: Part,
+        part: Part,
         depth: usize,
         out: &mut Vec<Node>,
     ) -> u32 {
@@ -986,14 +1045,43 @@ impl Builder {
             return leaf(r.begin, 1);
         }
         // (On one thread the parallel path would only add copies.)
-        let parallel = r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1;
-        if parallel {
-            self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS);
+        if r.len() >= PARALLEL_ITEMS && rayon::current_num_threads() > 1 {
+            let laid = self.parallel_subtree(refs, part, depth, 1);
+            let at = out.len();
+            lay_out(&laid, out);
+            return at as u32;
         }
-        // Up to W children: split the largest child that wants splitting.
+        let (kids, len) = self.children(refs, part, depth, 1);
+        let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
+        let at = out.len();
+        out.push(Node::EMPTY);
+        let mut node = Node::EMPTY;
+        for (i, k) in kids.enumerate() {
+            let kr = k.r;
+            let sub = refs_of(refs, &r, &kr);
+            let c = self.subtree_of(sub, k, depth + 1, out);
+            self.set_child(&mut node, i, c, &kr);
+        }
+        self.deeper(depth + 1);
+        out[at] = node;
+        at as u32
+    }
+
+    /// The node of `part` at node level `depth` (its range divides) and
+    /// its children's ranges: the node's binary levels divided, the
+    /// largest child that divides first, until it has `W` children or
+    /// none divides. Returns them in order, and how many.
+    fn children(
+        &self,
+        refs: &mut [PrimRef],
+        part: Part,
+        depth: usize,
+        tasks: usize,
+    ) -> ([Option<Part>; W], usize) {
+        let r = part.r;
         // (On the stack: a vector here was an allocation per node.)
         let mut all: [Option<Part>; W] = Default::default();
-        let (a, b) = self.halves(refs, part, depth + 1, true);
+        let (a, b) = self.halves(refs, part, depth + 1, true, tasks);
         (all[0], all[1]) = (Some(a), Some(b));
         let mut len = 2;
         while len < W {
@@ -1006,7 +1094,7 @@ impl Builder {
             let Some(i) = pick else { break };
             let k = all[i].take().expect("filled");
             let kr = k.r;
-            let (a, b) = self.halves(refs_of(refs, &r, &kr), k, depth + 1, false);
+            let (a, b) = self.halves(refs_of(refs, &r, &kr), k, depth + 1, false, tasks);
             // `a` and `b` take `k`'s place, in order.
             for j in (i + 1..len).rev() {
                 all[j + 1] = all[j].take();
@@ -1014,67 +1102,165 @@ impl Builder {
             (all[i], all[i + 1]) = (Some(a), Some(b));
             len += 1;
         }
-        let kids = all.into_iter().take(len).map(|k| k.expect("filled"));
-        let at = out.len();
-        out.push(Node::EMPTY);
-        let mut node = Node::EMPTY;
-        if parallel {
-            // Children in parallel, each into its own array, then appended
-            // with their node indices shifted.
-            let mut slices = Vec::with_capacity(W);
-            let mut rest = &mut *refs;
-            let mut base = r.begin;
-            for k in kids {
-                let (mine, tail) = rest.split_at_mut(k.r.end - base);
-                let begin = k.r.begin - base;
-                base = k.r.end;
-                slices.push((&mut mine[begin..], k));
-                rest = tail;
-            }
-            let subs: Vec<(u32, Range, Vec<Node>)> = slices
-                .into_par_iter()
-                .map(|(s, k)| {
-                    let mut v = Vec::with_capacity(s.len() / 8 + 1);
-                    let kr = k.r;
-                    let c = self.subtree_of(s, k, depth + 1, &mut v);
-                    (c, kr, v)
-                })
-                .collect();
-            // Appended on all threads: node `g` of the children's nodes
-            // (laid out one child's after another) comes from the child
-            // whose nodes start at or before it, shifted by where they land.
-            let mut starts = Vec::with_capacity(subs.len() + 1);
-            let mut total = 0;
-            for (c, k, v) in &subs {
-                starts.push(total);
-                let shift = (out.len() + total) as u32;
-                let c = if is_leaf(*c) { *c } else { c + shift };
-                self.set_child(&mut node, starts.len() - 1, c, k);
-                total += v.len();
-            }
-            let base = out.len();
-            out.par_extend((0..total).into_par_iter().with_min_len(1024).map(|g| {
-                let i = starts.partition_point(|&s| s <= g) - 1;
-                let shift = (base + starts[i]) as u32;
-                let mut n = subs[i].2[g - starts[i]];
-                for ch in &mut n.child {
-                    if !is_leaf(*ch) {
-                        *ch += shift;
-                    }
-                }
-                n
-            }));
-        } else {
-            for (i, k) in kids.enumerate() {
+        (all, len)
+    }
+
+    /// [`Builder::subtree_of`] on several threads, of a range that divides:
+    /// its binary levels divided ahead on all threads, then its children
+    /// built in parallel, each into an array of its own (or, if large, a
+    /// [`Laid`] of its own), laid out in one array at the end.
+    fn parallel_subtree(
+        &self,
+        refs: &mut [PrimRef],
+        mut part: Part,
+        depth: usize,
+        tasks: usize,
+    ) -> Laid {
+        let r = part.r;
+        self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS, tasks);
+        let (kids, len) = self.children(refs, part, depth, tasks);
+        let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
+        let mut slices = Vec::with_capacity(W);
+        let mut rest = &mut *refs;
+        let mut base = r.begin;
+        for k in kids {
+            let (mine, tail) = rest.split_at_mut(k.r.end - base);
+            let begin = k.r.begin - base;
+            base = k.r.end;
+            slices.push((&mut mine[begin..], k));
+            rest = tail;
+        }
+        let tasks = tasks * slices.len();
+        let subs: Vec<(u32, Range, Laid)> = slices
+            .into_par_iter()
+            .map(|(s, k)| {
                 let kr = k.r;
-                let sub = refs_of(refs, &r, &kr);
-                let c = self.subtree_of(sub, k, depth + 1, out);
-                self.set_child(&mut node, i, c, &kr);
+                if k.plan.is_some() && kr.len() >= PARALLEL_ITEMS {
+                    (0, kr, self.parallel_subtree(s, k, depth + 1, tasks))
+                } else {
+                    // Built in this thread's scratch array, then copied
+                    // (from the cache) to one of the exact size: fresh
+                    // arrays of a guessed size took fresh pages.
+                    SCRATCH.with_borrow_mut(|v| {
+                        v.clear();
+                        let c = self.subtree_of(s, k, depth + 1, v);
+                        (c, kr, Laid::Flat(v.to_vec()))
+                    })
+                }
+            })
+            .collect();
+        // The children's nodes follow the node, one child's after another.
+        let mut node = Node::EMPTY;
+        let mut at = 1;
+        for (i, (c, k, laid)) in subs.iter().enumerate() {
+            let c = if is_leaf(*c) { *c } else { c + at as u32 };
+            self.set_child(&mut node, i, c, k);
+            at += laid.len();
+        }
+        self.deeper(depth + 1);
+        Laid::Parent {
+            node: Box::new(node),
+            kids: subs.into_iter().map(|(_, _, laid)| laid).collect(),
+            len: at,
+        }
+    }
+
+    /// Notes a node at level `level` (1: the root).
+    fn deeper(&self, level: usize) {
+        // Read first: the deepest level seldom changes, and a write per
+        // node would move the line between the threads.
+        if self.deepest.load(Relaxed) < level {
+            self.deepest.fetch_max(level, Relaxed);
+        }
+    }
+}
+
+thread_local! {
+    /// Where [`Builder::parallel_subtree`] builds a small child's nodes.
+    static SCRATCH: std::cell::RefCell<Vec<Node>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The nodes of a subtree whose children were built on several threads,
+/// each child's into an array of its own, before they are laid out in one
+/// array by [`lay_out`] (which copies each node once: appending each
+/// level's children to their parent's array copied every node once per
+/// level, and took fresh memory for each level's copy).
+enum Laid {
+    /// Nodes in order, their children's indices counted from the first.
+    Flat(Vec<Node>),
+    /// A node (its children's indices counted from its own place), then
+    /// its children's nodes, one child's after another: `len` nodes.
+    Parent {
+        node: Box<Node>,
+        kids: Vec<Laid>,
+        len: usize,
+    },
+}
+
+impl Laid {
+    fn len(&self) -> usize {
+        match self {
+            Laid::Flat(v) => v.len(),
+            Laid::Parent { len, .. } => *len,
+        }
+    }
+
+    /// The runs of nodes of `self`, laid out from `at`: (where the run
+    /// starts, its nodes). A node's children's indices count from the
+    /// start of its run.
+    fn runs<'a>(&'a self, at: usize, out: &mut Vec<(usize, &'a [Node])>) {
+        match self {
+            Laid::Flat(v) => {
+                if !v.is_empty() {
+                    out.push((at, v));
+                }
+            }
+            Laid::Parent { node, kids, .. } => {
+                out.push((at, std::slice::from_ref(&**node)));
+                let mut p = at + 1;
+                for k in kids {
+                    k.runs(p, out);
+                    p += k.len();
+                }
             }
         }
-        out[at] = node;
-        at as u32
     }
+}
+
+/// Appends the nodes of `laid` to `out`, their children's indices shifted
+/// to where they land, on all threads.
+fn lay_out(laid: &Laid, out: &mut Vec<Node>) {
+    let mut runs = Vec::new();
+    laid.runs(0, &mut runs);
+    let total = laid.len();
+    // The run holding node `g` is at or after `first[g / STEP]`, and a
+    // run is about a subtree of 2-4k items (hundreds of nodes): a step or
+    // two from there.
+    const STEP: usize = 256;
+    let mut first = Vec::with_capacity(total.div_ceil(STEP));
+    let mut i = 0;
+    for g in (0..total).step_by(STEP) {
+        while i + 1 < runs.len() && runs[i + 1].0 <= g {
+            i += 1;
+        }
+        first.push(i);
+    }
+    let base = out.len();
+    out.par_extend((0..total).into_par_iter().with_min_len(1024).map(|g| {
+        let mut i = first[g / STEP];
+        while i + 1 < runs.len() && runs[i + 1].0 <= g {
+            i += 1;
+        }
+        let (start, run) = runs[i];
+        let shift = (base + start) as u32;
+        let mut n = run[g - start];
+        for ch in &mut n.child {
+            if !is_leaf(*ch) {
+                *ch += shift;
+            }
+        }
+        n
+    }));
 }
 
 /// The items of `k` within `refs`, which holds the items of `r`.
@@ -1084,7 +1270,13 @@ fn refs_of<'a>(refs: &'a mut [PrimRef], r: &Range, k: &Range) -> &'a mut [PrimRe
 
 /// Turns the leaves' item ranges into ranges of [`Tri4`] blocks and fills
 /// the blocks (leaves in item order, so each leaf's blocks are contiguous).
-fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<Tri4> {
+///
+/// Each leaf's new reference is kept in its first item's spare lane
+/// ([`PrimRef::set_note`]) and each block's items packed in a word, not
+/// in an array of a word per item (4 MB on a 1M-triangle mesh, zeroed
+/// and mostly unused) and one of two words per block: sphere1m's build
+/// took 1289 page faults instead of 1549.
+fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &mut [PrimRef], src: &S) -> Vec<Tri4> {
     use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
     // The leaves tile the items in order; until here a leaf's reference
     // holds only its first item. Mark those (a bit per item), then each
@@ -1152,9 +1344,9 @@ fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<
         .collect();
     let total: usize = chunk_blocks.iter().sum();
     // Each leaf's reference to its blocks, at its first item; every
-    // block's items, filled chunk by chunk into their own slices.
-    let mut leaf_ref = vec![0u32; n];
-    let mut block_items: Vec<(u32, u8)> = vec![(0, 0); total];
+    // block's items (first and count: [`block_word`]), filled chunk by
+    // chunk into their own slices.
+    let mut block_items: Vec<u32> = vec![0; total];
     let mut pieces = Vec::with_capacity(chunk_blocks.len());
     let mut rest = &mut block_items[..];
     let mut first = 0;
@@ -1164,31 +1356,33 @@ fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<
         rest = tail;
         first += k;
     }
-    leaf_ref
-        .par_chunks_mut(CHUNK)
-        .zip(pieces)
-        .enumerate()
-        .for_each(|(c, (refs_out, (first, blocks_out)))| {
+    refs.par_chunks_mut(CHUNK).zip(pieces).enumerate().for_each(
+        |(c, (refs_out, (first, blocks_out)))| {
             let mut b = 0;
             for (s, k) in leaves(c * CHUNK, ((c + 1) * CHUNK).min(n)) {
                 let nb = k.div_ceil(4);
-                refs_out[s - c * CHUNK] = leaf(first + b, nb);
+                refs_out[s - c * CHUNK].set_note(leaf(first + b, nb));
                 for (j, out) in blocks_out[b..b + nb].iter_mut().enumerate() {
-                    *out = ((s + 4 * j) as u32, (k - 4 * j).min(4) as u8);
+                    *out = block_word(s + 4 * j, (k - 4 * j).min(4));
                 }
                 b += nb;
             }
-        });
+        },
+    );
+    let refs = &*refs;
     nodes.par_iter_mut().for_each(|n| {
         for c in &mut n.child {
             if is_leaf(*c) && *c != EMPTY {
-                *c = leaf_ref[leaf_range(*c).0];
+                *c = refs[leaf_range(*c).0].note();
             }
         }
     });
     let mut tris = Vec::with_capacity(block_items.len());
     huge_pages(&tris);
-    let items = |(s, k): (u32, u8)| &refs[s as usize..s as usize + k as usize];
+    let items = |at: u32| {
+        let (s, k) = block_range(at);
+        &refs[s..s + k]
+    };
     tris.par_extend(
         block_items
             .par_iter()
@@ -1206,6 +1400,17 @@ fn fill_leaves<S: Source>(nodes: &mut [Node], refs: &[PrimRef], src: &S) -> Vec<
             }),
     );
     tris
+}
+
+/// The items of a block, `k` (1 to 4) from item `s`, in a word.
+fn block_word(s: usize, k: usize) -> u32 {
+    debug_assert!(s < 1 << 28 && (1..=4).contains(&k));
+    (s as u32) << 2 | (k as u32 - 1)
+}
+
+/// The `(first item, count)` of a [`block_word`].
+fn block_range(w: u32) -> (usize, usize) {
+    ((w >> 2) as usize, (w & 3) as usize + 1)
 }
 
 /// How many blocks ahead `fill_leaves` asks for vertices.

@@ -64,15 +64,21 @@ pub(super) const BLOCK: usize = 64;
 /// the cached range); otherwise (long runs, as in a mesh stored in order,
 /// or a range too large for the cache) the in-place loop gathers the
 /// bounds in the same pass. Measured (build, 1 thread): bunny40k 7-9%
-/// faster, the spheres (stored in order) within 2%. Large ranges, given
-/// several threads, go to [`parallel_partition`], which gives the in-place
-/// loop's permutation.
+/// faster, the spheres (stored in order) within 2%. `parallel`: the range
+/// goes to [`parallel_partition`], which gives the in-place loop's
+/// permutation (for ranges of at least `PARALLEL_PARTITION` items only:
+/// below, the serial ways may differ from it).
 pub(super) fn partition(
     v: &mut [PrimRef],
     left: impl Fn(Vec3A) -> bool + Sync,
+    parallel: bool,
 ) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
     let n = v.len();
-    if n >= PARALLEL_PARTITION && rayon::current_num_threads() > 1 {
+    if parallel {
+        assert!(
+            n >= PARALLEL_PARTITION,
+            "the parallel partition of a small range"
+        );
         return parallel_partition(v, left);
     }
     if (2 * BLOCK..=BLOCK_PARTITION_MAX).contains(&n) && side_changes(&v[..BLOCK / 2], &left) >= 4 {
@@ -201,8 +207,12 @@ pub(super) fn block_partition(v: &mut [PrimRef], left: &impl Fn(Vec3A) -> bool) 
 }
 
 /// Ranges of at least this many items are partitioned on several threads
-/// (when there are several).
+/// (when there are several, and fewer tasks than threads to keep them
+/// busy).
 pub(super) const PARALLEL_PARTITION: usize = 32 * 1024;
+/// Ranges of at least this many items are partitioned on several threads
+/// whatever else runs.
+pub(super) const SHARED_PARALLEL_PARTITION: usize = 256 * 1024;
 /// Items per task of [`parallel_partition`]'s passes (a multiple of 64:
 /// each task owns whole words of the side bits).
 const PARALLEL_CHUNK: usize = 8 * 1024;
@@ -217,8 +227,11 @@ const PARALLEL_CHUNK: usize = 8 * 1024;
 /// exactly those on the wrong side of `k`, paired in that order. Here:
 /// one pass in chunks records each item's side (a bit) and gathers both
 /// sides' bounds (min and max: the same whatever the order); the count
-/// gives `k`; the misplaced items' positions come from the bits; then the
-/// pairs are swapped, in parallel pieces that touch disjoint slices.
+/// gives `k`; then the pairs are swapped in parallel pieces, each walking
+/// the bits from its first pair (found by counting bits, [`Sides::nth`]),
+/// and touching slices of `v` that no other piece touches. (Lists of the
+/// misplaced items' positions, gathered and then read, cost a tenth more
+/// than the whole partition on a 1M-item range.)
 pub(super) fn parallel_partition(
     v: &mut [PrimRef],
     left: impl Fn(Vec3A) -> bool + Sync,
@@ -231,15 +244,20 @@ pub(super) fn parallel_partition(
         .zip(bits.par_chunks_mut(PARALLEL_CHUNK / 64))
         .map(|(items, bits)| {
             let (mut l, mut r, mut k) = (Acc::new(), Acc::new(), 0);
-            for (i, p) in items.iter().enumerate() {
-                let c = p.centroid();
-                if left(c) {
-                    l.add(p.lo(), p.hi(), c);
-                    bits[i / 64] |= 1 << (i % 64);
-                    k += 1;
-                } else {
-                    r.add(p.lo(), p.hi(), c);
+            for (items, word) in items.chunks(64).zip(bits.iter_mut()) {
+                let mut w = 0u64;
+                for (i, p) in items.iter().enumerate() {
+                    let c = p.centroid();
+                    let goes_left = left(c);
+                    if goes_left {
+                        l.add(p.lo(), p.hi(), c);
+                    } else {
+                        r.add(p.lo(), p.hi(), c);
+                    }
+                    w |= (goes_left as u64) << i;
                 }
+                *word = w;
+                k += w.count_ones() as usize;
             }
             (k, l, r)
         })
@@ -247,52 +265,146 @@ pub(super) fn parallel_partition(
             || (0, Acc::new(), Acc::new()),
             |a, b| (a.0 + b.0, a.1.union(&b.1), a.2.union(&b.2)),
         );
-    // Positions in `[from, to)` whose bit is `want`, in increasing order.
-    let misplaced = |from: usize, to: usize, want: bool| -> Vec<u32> {
-        let chunks = (from..to).step_by(PARALLEL_CHUNK).collect::<Vec<_>>();
-        chunks
-            .into_par_iter()
-            .map(|s| {
-                let e = (s + PARALLEL_CHUNK).min(to);
-                (s..e)
-                    .filter(|&i| (bits[i / 64] >> (i % 64) & 1 != 0) == want)
-                    .map(|i| i as u32)
-                    .collect::<Vec<u32>>()
-            })
-            .flatten_iter()
-            .collect()
-    };
-    let (goes_right, goes_left) = (misplaced(0, k, false), misplaced(k, n, true));
-    debug_assert_eq!(goes_right.len(), goes_left.len());
-    // Pair `t`: `goes_right[t]` (ascending) with `goes_left[m − 1 − t]`
-    // (descending). Pieces of pairs own the slices between their first and
-    // last positions on each side, which do not overlap.
-    let m = goes_right.len();
+    let sides = Sides::new(&bits, n);
+    // The misplaced: zeros below `k` (they go right), ones from `k` on
+    // (they go left), as many of each; every zero below `k` comes before
+    // any zero above it, every one from `k` on after any one below it.
+    let m = k - sides.ones_below(k);
+    if m == 0 {
+        return (k, l.boxes(), r.boxes());
+    }
+    let ones = sides.ones_below(n);
+    // Pair `t`: the `t`-th zero (ascending) with the `t`-th one from the
+    // top. Pieces of pairs `[t0, t1)` own `v[zero(t0)..zero(t1))` on the
+    // left (`zero(m)`: `k`) and `v[one(t1)+1..one(t0)+1)` on the right.
     let per = PARALLEL_CHUNK.max(m.div_ceil(4 * rayon::current_num_threads().max(1)));
-    let (mut lo, mut hi) = v.split_at_mut(k);
-    let (mut lo_base, mut hi_end) = (0usize, n);
-    let mut pieces = Vec::new();
+    let zero = |t: usize| if t == m { k } else { sides.nth(t, false) };
+    let top = |t: usize| {
+        if t == m {
+            k
+        } else {
+            sides.nth(ones - 1 - t, true) + 1
+        }
+    };
+    let (lo, hi) = v.split_at_mut(k);
+    // `lo` starts where the next piece's left side does, `hi` ends where
+    // its right side does.
+    let (mut lo, mut hi) = (&mut lo[zero(0)..], &mut hi[..top(0) - k]);
+    let mut pieces = Vec::with_capacity(m.div_ceil(per));
     for t0 in (0..m).step_by(per) {
         let t1 = (t0 + per).min(m);
-        // Left side: positions goes_right[t0..t1], ascending.
-        let a_end = goes_right[t1 - 1] as usize + 1;
-        let (mine, rest) = std::mem::take(&mut lo).split_at_mut(a_end - lo_base);
-        let a = (mine, lo_base, &goes_right[t0..t1]);
-        (lo, lo_base) = (rest, a_end);
-        // Right side: positions goes_left[m − t1..m − t0], taken from the top.
-        let b_start = goes_left[m - t1] as usize;
-        let cut = b_start - (hi_end - hi.len());
-        let (rest, mine) = std::mem::take(&mut hi).split_at_mut(cut);
-        let b = (mine, b_start, &goes_left[m - t1..m - t0]);
-        (hi, hi_end) = (rest, b_start);
-        pieces.push((a, b));
+        let (a0, a1) = (zero(t0), zero(t1));
+        let (b0, b1) = (top(t1), top(t0));
+        let (mine, rest) = std::mem::take(&mut lo).split_at_mut(a1 - a0);
+        lo = rest;
+        let cut = hi.len() - (b1 - b0);
+        let (rest, theirs) = std::mem::take(&mut hi).split_at_mut(cut);
+        hi = rest;
+        pieces.push(((mine, a0), (theirs, b0), t1 - t0));
     }
     pieces
         .into_par_iter()
-        .for_each(|((a, a_base, ra), (b, b_base, lb))| {
-            for (&i, &j) in ra.iter().zip(lb.iter().rev()) {
-                std::mem::swap(&mut a[i as usize - a_base], &mut b[j as usize - b_base]);
+        .for_each(|((a, a0), (b, b0), pairs)| {
+            // Zeros ascending from `a0`, ones descending from the top of `b`.
+            let zeros = sides.from(a0, false);
+            let down = sides.down_from(b0 + b.len(), true);
+            for (i, j) in zeros.zip(down).take(pairs) {
+                std::mem::swap(&mut a[i - a0], &mut b[j - b0]);
             }
         });
     (k, l.boxes(), r.boxes())
+}
+
+/// The sides of a range's items, a bit per item (1: left), with counts of
+/// ones before each word for finding the `t`-th one or zero.
+pub(super) struct Sides<'a> {
+    bits: &'a [u64],
+    /// Ones in the words before each word (and in all of them, last).
+    before: Vec<u32>,
+}
+
+impl<'a> Sides<'a> {
+    pub(super) fn new(bits: &'a [u64], n: usize) -> Self {
+        debug_assert!(bits.len() == n.div_ceil(64) && n < u32::MAX as usize);
+        let mut before = Vec::with_capacity(bits.len() + 1);
+        let mut c = 0;
+        for w in bits {
+            before.push(c);
+            c += w.count_ones();
+        }
+        before.push(c);
+        Sides { bits, before }
+    }
+
+    /// Ones among the first `i` items.
+    pub(super) fn ones_below(&self, i: usize) -> usize {
+        let (w, b) = (i / 64, i % 64);
+        let partial = if b == 0 {
+            0
+        } else {
+            (self.bits[w] & ((1u64 << b) - 1)).count_ones()
+        };
+        (self.before[w] + partial) as usize
+    }
+
+    /// Where the `t`-th (from 0) one, or zero, is; it must exist (zeros
+    /// past the last item do not count: only the last word has them, and
+    /// no zero asked for lies beyond the ones that follow it).
+    pub(super) fn nth(&self, t: usize, one: bool) -> usize {
+        let count = |w: usize| {
+            let ones = self.before[w] as usize;
+            if one {
+                ones
+            } else {
+                64 * w - ones
+            }
+        };
+        // The last word whose count before it is at most `t`.
+        let (mut w, mut end) = (0, self.bits.len());
+        while w < end {
+            let mid = (w + end) / 2;
+            if count(mid + 1) <= t {
+                w = mid + 1;
+            } else {
+                end = mid;
+            }
+        }
+        let mut word = if one { self.bits[w] } else { !self.bits[w] };
+        for _ in 0..t - count(w) {
+            word &= word - 1;
+        }
+        64 * w + word.trailing_zeros() as usize
+    }
+
+    /// The positions of ones (or zeros) from `i` on, ascending (as many as
+    /// asked for: they must exist).
+    pub(super) fn from(&self, i: usize, one: bool) -> impl Iterator<Item = usize> + '_ {
+        let pick = move |w: u64| if one { w } else { !w };
+        let (mut w, mut word) = (i / 64, pick(self.bits[i / 64]) & (u64::MAX << (i % 64)));
+        std::iter::from_fn(move || {
+            while word == 0 {
+                w += 1;
+                word = pick(self.bits[w]);
+            }
+            let at = 64 * w + word.trailing_zeros() as usize;
+            word &= word - 1;
+            Some(at)
+        })
+    }
+
+    /// The positions of ones (or zeros) below `end`, descending.
+    pub(super) fn down_from(&self, end: usize, one: bool) -> impl Iterator<Item = usize> + '_ {
+        let pick = move |w: u64| if one { w } else { !w };
+        let (last, b) = ((end - 1) / 64, (end - 1) % 64);
+        let (mut w, mut word) = (last, pick(self.bits[last]) & (u64::MAX >> (63 - b)));
+        std::iter::from_fn(move || {
+            while word == 0 {
+                w -= 1;
+                word = pick(self.bits[w]);
+            }
+            let top = 63 - word.leading_zeros() as usize;
+            word &= !(1u64 << top);
+            Some(64 * w + top)
+        })
+    }
 }

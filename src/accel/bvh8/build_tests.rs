@@ -18,6 +18,7 @@ fn builder() -> Builder {
     Builder {
         pad: Vec3::ZERO,
         wide: true,
+        deepest: AtomicUsize::new(0),
     }
 }
 
@@ -334,7 +335,7 @@ fn partition_separates_and_bounds_both_sides() {
             }
             for cut in [-1.0, 0.1, 0.3, 0.5, 0.9, 2.0] {
                 let mut v = items.clone();
-                let (k, lb, rb) = partition(&mut v, |c| c.x < cut);
+                let (k, lb, rb) = partition(&mut v, |c| c.x < cut, false);
                 assert_eq!(k, items.iter().filter(|p| p.centroid().x < cut).count());
                 assert!(v[..k].iter().all(|p| p.centroid().x < cut));
                 assert!(v[k..].iter().all(|p| p.centroid().x >= cut));
@@ -433,6 +434,41 @@ fn the_parallel_partition_permutes_as_the_serial_one() {
                 assert!(ids(&serial) == ids(&par), "n {n} cut {cut} sorted {sorted}");
             }
         }
+    }
+}
+
+/// The parallel partition's bit walks find what a scan finds: the `t`-th
+/// one and zero, the ones and zeros from any position up and down, the
+/// ones below any position, on words full, empty and mixed, with a last
+/// word part full.
+#[test]
+fn the_sides_find_what_a_scan_finds() {
+    let mut r = Rng::new(49);
+    let n: usize = 64 * 7 + 13;
+    let mut bits = vec![0u64; n.div_ceil(64)];
+    bits[0] = u64::MAX;
+    bits[2] = 0x8000_0000_0000_0001;
+    for (w, word) in bits.iter_mut().enumerate().skip(3) {
+        for b in 0..64 {
+            if 64 * w + b < n && r.f() < 0.3 {
+                *word |= 1 << b;
+            }
+        }
+    }
+    let bit = |i: usize| bits[i / 64] >> (i % 64) & 1 != 0;
+    let sides = Sides::new(&bits, n);
+    for one in [true, false] {
+        let at: Vec<usize> = (0..n).filter(|&i| bit(i) == one).collect();
+        for (t, &i) in at.iter().enumerate() {
+            assert_eq!(sides.nth(t, one), i, "{t}-th, one {one}");
+            let up: Vec<usize> = sides.from(i, one).take(at.len() - t).collect();
+            assert_eq!(up, at[t..], "from {i}, one {one}");
+            let down: Vec<usize> = sides.down_from(i + 1, one).take(t + 1).collect();
+            assert!(down.iter().eq(at[..=t].iter().rev()), "down from {i}");
+        }
+    }
+    for i in 0..=n {
+        assert_eq!(sides.ones_below(i), (0..i).filter(|&j| bit(j)).count());
     }
 }
 

@@ -157,7 +157,7 @@ impl Bvh8 {
 
     fn from_built(b: build::Built) -> Self {
         Bvh8 {
-            deep: build::depth(&b.nodes) > traverse::SHALLOW_DEPTH,
+            deep: b.depth > traverse::SHALLOW_DEPTH,
             nodes: b.nodes,
             tris: b.tris,
             bounds: b.bounds,
