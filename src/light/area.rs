@@ -274,7 +274,7 @@ pub(super) fn sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> Option<ConeSampl
 }
 
 /// The cone a sphere subtends from a point outside it: what every sample
-/// of [`sphere_cone`] from that point shares.
+/// of `sphere_cone` from that point shares.
 #[derive(Clone, Copy, Debug)]
 pub struct Cone {
     c: Vec3,
