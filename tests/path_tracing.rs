@@ -948,6 +948,28 @@ fn max_depth_is_the_path_depth_under_the_path_tracer() {
     assert!(help.contains("Mitsuba's max_depth is N+1"), "{help}");
 }
 
+/// The variance at 64 samples per pixel of `scene` under `settings`: half
+/// the mean squared difference of two renders of other seeds (1 and 2,
+/// 128×128, Sobol, 2 threads); also the rays a render traced (their mean)
+/// and the two images.
+fn two_seed_variance(scene: &Path, settings: PathSettings) -> (f64, f64, Vec<Vec<Vec3>>) {
+    let mut rays = 0;
+    let mut images = Vec::new();
+    for seed in [1, 2] {
+        let mut job = Job::new(scene.to_path_buf(), 128, 128);
+        job.sampling.spp = 64;
+        job.sampling.seed = seed;
+        job.shading.bounces = settings.max_bounces;
+        job.integrator = IntegratorKind::Path(settings);
+        job.threads = Some(2);
+        let report = job.run().unwrap();
+        rays += report.counters.rays_total();
+        images.push(report.frame.color);
+    }
+    let var = rmse(&images[0], &images[1]).powi(2) / 2.0;
+    (var, rays as f64 / 2.0, images)
+}
+
 /// Russian roulette's scale: a path survives with probability
 /// `min(0.95, rr_scale · max β)`. On the caustic Cornell box, whose noise is
 /// light that reaches the walls through the mirror and glass spheres and
@@ -965,21 +987,8 @@ fn roulette_scale_two_is_more_efficient_on_the_caustic_box() {
             rr_scale,
             ..PathSettings::default()
         };
-        let mut rays = 0;
-        let mut images = Vec::new();
-        for seed in [1, 2] {
-            let mut job = Job::new(scene.clone(), 128, 128);
-            job.sampling.spp = 64;
-            job.sampling.seed = seed;
-            job.shading.bounces = settings.max_bounces;
-            job.integrator = IntegratorKind::Path(settings);
-            job.threads = Some(2);
-            let report = job.run().unwrap();
-            rays += report.counters.rays_total();
-            images.push(report.frame.color);
-        }
-        let var = rmse(&images[0], &images[1]).powi(2) / 2.0;
-        (var, rays as f64 / 2.0, mean(&images[0]) + mean(&images[1]))
+        let (var, rays, images) = two_seed_variance(&scene, settings);
+        (var, rays, mean(&images[0]) + mean(&images[1]))
     };
     let (v1, r1, m1) = measure(1.0);
     let (v2, r2, m2) = measure(2.0);
@@ -1010,17 +1019,7 @@ fn caustic_paths_carry_most_of_the_caustic_box_noise() {
             caustics,
             ..PathSettings::default()
         };
-        let mut images = Vec::new();
-        for seed in [1, 2] {
-            let mut job = Job::new(scene.clone(), 128, 128);
-            job.sampling.spp = 64;
-            job.sampling.seed = seed;
-            job.shading.bounces = settings.max_bounces;
-            job.integrator = IntegratorKind::Path(settings);
-            job.threads = Some(2);
-            images.push(job.run().unwrap().frame.color);
-        }
-        let var = rmse(&images[0], &images[1]).powi(2) / 2.0;
+        let (var, _, images) = two_seed_variance(&scene, settings);
         let m = (mean(&images[0]) + mean(&images[1])).element_sum() as f64 / 6.0;
         (var, m)
     };
