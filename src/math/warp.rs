@@ -1,8 +1,9 @@
 //! Warps from the unit square to the shapes that sampling needs (disk,
 //! hemisphere, triangle), each with the density it produces.
 
+use crate::math::float::sincos_turn;
 use crate::math::{Vec2, Vec3};
-use std::f32::consts::{FRAC_1_PI, PI};
+use std::f32::consts::FRAC_1_PI;
 
 /// Shirley and Chiu's concentric map from the square to the unit disk: it
 /// keeps strata compact (a polar map squeezes them near the centre).
@@ -12,12 +13,15 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     if a == Vec2::ZERO {
         return Vec2::ZERO;
     }
-    let (r, theta) = if a.x.abs() > a.y.abs() {
-        (a.x, PI / 4.0 * (a.y / a.x))
+    // The angle in turns (an eighth of a turn per unit of the ratio), its
+    // sine and cosine by `sincos_turn`, not libm's `sincosf`.
+    let (r, turns) = if a.x.abs() > a.y.abs() {
+        (a.x, 0.125 * (a.y / a.x))
     } else {
-        (a.y, PI / 2.0 - PI / 4.0 * (a.x / a.y))
+        (a.y, 0.25 - 0.125 * (a.x / a.y))
     };
-    Vec2::new(theta.cos(), theta.sin()) * r
+    let (sin, cos) = sincos_turn(turns);
+    Vec2::new(cos, sin) * r
 }
 
 /// A direction of the hemisphere around unit `n` with density `cos θ / π`
@@ -140,7 +144,7 @@ mod tests {
             );
         }
         assert_eq!(cosine_hemisphere_pdf(-0.5), 0.0);
-        assert!((cosine_hemisphere_pdf(1.0) - 1.0 / PI).abs() < 1e-7);
+        assert!((cosine_hemisphere_pdf(1.0) - 1.0 / std::f32::consts::PI).abs() < 1e-7);
     }
 
     /// Uniform over the triangle: barycentrics sum to 1, stay in [0, 1],
