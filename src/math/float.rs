@@ -102,19 +102,22 @@ pub fn step_away(x: f32, offset: f32) -> f32 {
     f32::from_bits(if keep { bits } else { stepped })
 }
 
-/// `(sin 2πu, cos 2πu)` for a turn fraction `u` in `[0, 1]`, within
+/// `(sin 2πu, cos 2πu)` for a turn fraction `u` in `[−1, 1]`, within
 /// 2.5e-7 of the exact values (test `sincos_turn_is_accurate`), both
 /// returned in registers: `libm`'s `sincosf` writes them through pointers,
 /// and it and the wait for its results were a tenth of an area-light
 /// render (perf, sphere_lights_knot at 16 spp). Out of line: inlined into
 /// the Whitted tree's sample loop it made the render 30% slower.
-/// The turn is reduced exactly to the nearest quarter (`r = u − q/4`,
+/// The turn is reduced exactly to a nearest quarter (`r = u − q/4`,
 /// `|r| ≤ 1/8`, exact in f32), and the sine and cosine of `2πr` taken from
 /// their Taylor series to the 9th and 10th power (the first term left out
 /// is below 2.5e-9 and 2.6e-8 at `π/4`).
 #[inline(never)]
 pub fn sincos_turn(u: f32) -> (f32, f32) {
-    let q = (u * 4.0).round();
+    // Round to the nearest quarter without libm's `roundf` (a call on
+    // the baseline target): adding 1.5·2²³ leaves no fraction bits.
+    const SHIFT: f32 = 12_582_912.0;
+    let q = (u * 4.0 + SHIFT) - SHIFT;
     let a = (u - q * 0.25) * std::f32::consts::TAU;
     let a2 = a * a;
     let s = a
@@ -125,7 +128,7 @@ pub fn sincos_turn(u: f32) -> (f32, f32) {
         + a2 * (-0.5
             + a2 * (1.0 / 24.0
                 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40_320.0 - a2 * (1.0 / 3_628_800.0)))));
-    // Rotate by q quarter turns (q in 0..=4; 4 is a whole turn).
+    // Rotate by q quarter turns (q in -4..=4; two's complement & 3 is q mod 4).
     match (q as i32) & 3 {
         0 => (s, c),
         1 => (c, -s),
@@ -205,13 +208,13 @@ mod tests {
             assert!(e < 2.5e-7, "u {u}: ({s}, {c}) vs ({es}, {ec})");
             *worst = worst.max(e);
         };
-        for i in 0..=n {
+        for i in -n..=n {
             check(i as f32 / n as f32, &mut worst);
         }
-        for k in 0..=8 {
+        for k in -8..=8 {
             let b = k as f32 / 8.0;
             for u in [b.next_down(), b, b.next_up()] {
-                if (0.0..=1.0).contains(&u) {
+                if (-1.0..=1.0).contains(&u) {
                     check(u, &mut worst);
                 }
             }
