@@ -64,8 +64,14 @@ pub struct AmbientOcclusion {
 }
 
 impl Integrator for AmbientOcclusion {
-    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
-        let Some(h) = cx.closest(ray, tmin, Branch::CAMERA) else {
+    fn li_hit<O: RayObserver>(
+        &self,
+        cx: &mut Trace<O>,
+        ray: &Ray,
+        _: f32,
+        hit: Option<Hit>,
+    ) -> (Vec3, Option<Hit>) {
+        let Some(h) = hit else {
             return (Vec3::ONE, None);
         };
         // Both sides of a surface are tested: the one the ray sees.

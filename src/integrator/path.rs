@@ -574,11 +574,12 @@ fn sample_sphere_cone(p: Vec3, center: Vec3, radius: f32, u: Vec2) -> Option<Sur
 }
 
 impl Integrator for PathTracer {
-    fn li<O: RayObserver>(
+    fn li_hit<O: RayObserver>(
         &self,
         cx: &mut Trace<O>,
         camera_ray: &Ray,
         tmin: f32,
+        camera_hit: Option<Hit>,
     ) -> (Vec3, Option<Hit>) {
         let world = cx.world;
         let s = &self.settings;
@@ -597,17 +598,22 @@ impl Integrator for PathTracer {
         // `settings.caustics` drops, and whether light found now (through
         // delta lobes since that vertex) is one.
         let (mut from_dropping, mut dropped) = (false, false);
+        // The camera ray's hit is given; the path's other rays are traced.
+        let mut given = Some(camera_hit);
         loop {
             let weight = beta.max_element();
-            let hit = cx.closest(
-                &ray,
-                ray_tmin,
-                Branch {
-                    kind,
-                    depth,
-                    weight,
-                },
-            );
+            let hit = match given.take() {
+                Some(hit) => hit,
+                None => cx.closest(
+                    &ray,
+                    ray_tmin,
+                    Branch {
+                        kind,
+                        depth,
+                        weight,
+                    },
+                ),
+            };
             // The scene's area lights: emitting surfaces that do not block
             // (shadow rays pass through them too), crossed before the hit.
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
