@@ -22,14 +22,8 @@ impl NormalsAsColours {
 }
 
 impl Integrator for NormalsAsColours {
-    fn li_hit<O: RayObserver>(
-        &self,
-        _: &mut Trace<O>,
-        _: &Ray,
-        _: f32,
-        hit: Option<Hit>,
-    ) -> (Vec3, Option<Hit>) {
-        (hit.map_or(Vec3::ZERO, |h| Self::colour(h.normal)), hit)
+    fn li_hit<O: RayObserver>(&self, _: &mut Trace<O>, _: &Ray, _: f32, hit: Option<&Hit>) -> Vec3 {
+        hit.map_or(Vec3::ZERO, |h| Self::colour(h.normal))
     }
 }
 

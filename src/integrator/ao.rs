@@ -69,10 +69,10 @@ impl Integrator for AmbientOcclusion {
         cx: &mut Trace<O>,
         ray: &Ray,
         _: f32,
-        hit: Option<Hit>,
-    ) -> (Vec3, Option<Hit>) {
+        hit: Option<&Hit>,
+    ) -> Vec3 {
         let Some(h) = hit else {
-            return (Vec3::ONE, None);
+            return Vec3::ONE;
         };
         // Both sides of a surface are tested: the one the ray sees.
         let n = if h.normal.dot(ray.dir) > 0.0 {
@@ -81,7 +81,7 @@ impl Integrator for AmbientOcclusion {
             h.normal
         };
         let f = unoccluded(cx, &h.surface_point(), n, ray.time, &self.settings, 0);
-        (Vec3::splat(f), Some(h))
+        Vec3::splat(f)
     }
 }
 

@@ -99,19 +99,21 @@ pub trait Integrator: Sync {
     #[inline]
     fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
         let hit = cx.closest(ray, tmin, Branch::CAMERA);
-        self.li_hit(cx, ray, tmin, hit)
+        (self.li_hit(cx, ray, tmin, hit.as_ref()), hit)
     }
 
-    /// [`li`](Self::li) for a camera ray already traced: `hit` is its
-    /// closest hit beyond `tmin` (`World::intersect(ray, tmin, ∞)`), counted
-    /// and shown to the observer ([`Trace::seen`]).
+    /// The colour [`li`](Self::li) gives a camera ray already traced: `hit`
+    /// is its closest hit beyond `tmin` (`World::intersect(ray, tmin, ∞)`),
+    /// counted and shown to the observer ([`Trace::seen`]). By reference:
+    /// the hit is read where the world wrote it (a copy moved it with wide
+    /// loads of the world's narrow stores, which a CPU cannot forward).
     fn li_hit<O: RayObserver>(
         &self,
         cx: &mut Trace<O>,
         ray: &Ray,
         tmin: f32,
-        hit: Option<Hit>,
-    ) -> (Vec3, Option<Hit>);
+        hit: Option<&Hit>,
+    ) -> Vec3;
 }
 
 impl Integrator for Whitted {
@@ -123,8 +125,8 @@ impl Integrator for Whitted {
         cx: &mut Trace<O>,
         ray: &Ray,
         _: f32,
-        hit: Option<Hit>,
-    ) -> (Vec3, Option<Hit>) {
+        hit: Option<&Hit>,
+    ) -> Vec3 {
         self.shade_hit(cx, ray, hit, Branch::CAMERA)
     }
 }

@@ -579,8 +579,8 @@ impl Integrator for PathTracer {
         cx: &mut Trace<O>,
         camera_ray: &Ray,
         tmin: f32,
-        camera_hit: Option<Hit>,
-    ) -> (Vec3, Option<Hit>) {
+        camera_hit: Option<&Hit>,
+    ) -> Vec3 {
         let world = cx.world;
         let s = &self.settings;
         let background = world.background().color;
@@ -589,7 +589,6 @@ impl Integrator for PathTracer {
         let mut ray = *camera_ray;
         let mut ray_tmin = tmin;
         let mut kind = RayKind::Primary;
-        let mut first_hit = None;
         // The previous vertex: where the ray left, the BSDF density of its
         // direction, and whether it came from a delta lobe.
         let mut prev: Option<(Vec3, f32, bool)> = None;
@@ -603,7 +602,7 @@ impl Integrator for PathTracer {
         loop {
             let weight = beta.max_element();
             let hit = match given.take() {
-                Some(hit) => hit,
+                Some(hit) => hit.copied(),
                 None => cx.closest(
                     &ray,
                     ray_tmin,
@@ -653,9 +652,6 @@ impl Integrator for PathTracer {
                 }
                 break;
             };
-            if depth == 0 {
-                first_hit = Some(h);
-            }
             let mut scratch = None;
             let m = self.material(world, h.material, h.instance, h.point, &mut scratch);
             let le = self.emitted(m, &h, &ray);
@@ -761,7 +757,7 @@ impl Integrator for PathTracer {
             ray = spawn.spawn_ray(bs.wi).at_time(camera_ray.time);
             ray_tmin = 0.0;
         }
-        (radiance, first_hit)
+        radiance
     }
 }
 

@@ -383,9 +383,9 @@ mod tests {
             cx: &mut crate::integrator::Trace<O>,
             _: &crate::math::Ray,
             _: f32,
-            _: Option<crate::world::Hit>,
-        ) -> (Vec3, Option<crate::world::Hit>) {
-            (Vec3::splat(cx.stream.next_1d()), None)
+            _: Option<&crate::world::Hit>,
+        ) -> Vec3 {
+            Vec3::splat(cx.stream.next_1d())
         }
     }
 

@@ -80,17 +80,17 @@ impl<I: Integrator> Step<'_, I> {
     fn shade(
         &self,
         ray: &Ray,
-        hit: Option<Hit>,
+        hit: Option<&Hit>,
         stream: &mut SampleStream,
         counters: &mut Counters,
-    ) -> (Vec3, Option<Hit>) {
+    ) -> Vec3 {
         let cx = &mut Trace {
             world: self.world,
             stream,
             counters,
             observer: &mut NoObserver,
         };
-        cx.seen(ray, hit.as_ref(), Branch::CAMERA);
+        cx.seen(ray, hit, Branch::CAMERA);
         self.integrator.li_hit(cx, ray, self.camera.tmin(), hit)
     }
 
@@ -472,7 +472,8 @@ impl<'a, I: Integrator> Supersample<'a, I> {
                     unreachable!("every pixel of the packet has its sample")
                 };
                 let (o, i) = (*o, x0 + p as u32);
-                let (c, hit) = (self.step).shade(&rays[p].ray, hits[p], stream, counters);
+                let hit = hits[p].as_ref();
+                let c = (self.step).shade(&rays[p].ray, hit, stream, counters);
                 if spreads {
                     self.splats[p * spp as usize + k as usize] = (o, c);
                 } else {
@@ -483,7 +484,7 @@ impl<'a, I: Integrator> Supersample<'a, I> {
                 } else {
                     (o - self.reference).length_squared()
                 };
-                acc[p].hit(d2, hit.as_ref());
+                acc[p].hit(d2, hit);
                 if self.keep {
                     kept.push(SampleRecord {
                         pixel: (i, j),
