@@ -5,6 +5,7 @@
 //! trace each pixel's rays alone), on every path of the pixel loop, for
 //! every integrator, on 1 and 2 threads.
 
+use super::pixel::PACKET_PIXEL_SPAN;
 use super::*;
 use crate::accel::{AccelKind, PacketRay, Split, PACKET};
 use crate::integrator::{AmbientOcclusion, PathSettings, PathTracer, Whitted};
@@ -120,17 +121,43 @@ fn packet_hits_are_single_ray_hits() {
     assert!(hits > 0 && misses > 0, "{hits} hits, {misses} misses");
 }
 
+/// The loop takes packets on bvh8 where a pixel spans at most
+/// `PACKET_PIXEL_SPAN`: the knot's 40° camera at 317 pixels and above,
+/// not at 160; on other accelerators never.
+#[test]
+fn packets_are_taken_for_narrow_pixels_on_bvh8() {
+    let scene = own("mesh_knot_1k.txt");
+    let whitted = &Whitted::default();
+    for accel in [AccelKind::Bvh8, AccelKind::Bvh(Split::Sah)] {
+        let (world, camera) = world_of(&scene, accel, true);
+        let step = |size| Step {
+            world: &world,
+            camera: &camera,
+            integrator: whitted,
+            size,
+        };
+        let bvh8 = accel == AccelKind::Bvh8;
+        assert_eq!(step((317, 14)).packets(), bvh8);
+        assert_eq!(step((640, 480)).packets(), bvh8);
+        assert!(!step((160, 120)).packets());
+        assert_eq!(step((14, 317)).packets(), bvh8);
+    }
+}
+
 /// An orthographic camera's rays start at `t = −∞`: the render loop takes
 /// no packets for them (the packet walk would take them one by one).
 #[test]
 fn orthographic_cameras_take_no_packets() {
     let (world, camera) = tests::small_world();
     assert!(world.walks_packets() && camera.tmin() < 0.0);
+    assert!(camera.pixel_span((4000, 4000)) <= PACKET_PIXEL_SPAN);
     let step = Step {
         world: &world,
         camera: &camera,
         integrator: &Whitted::default(),
-        size: (8, 8),
+        // Pixels narrow enough for packets (the orthographic screen is 4
+        // wide): only the camera's `tmin` refuses them.
+        size: (4000, 4000),
     };
     assert!(!step.packets());
 }

@@ -36,6 +36,20 @@ pub const BAND_ROWS: usize = 4;
 /// so the same image).
 pub(super) const BLOCK: usize = 8;
 
+/// The widest pixel (radians between neighbouring pixels' rays:
+/// `CameraModel::pixel_span`) for which camera rays are traced in packets.
+/// Eight pixels of a row make a fan as wide as eight pixels: in a small
+/// image the packet's bounds are loose, and it enters boxes few of its
+/// rays enter. Callgrind, render instructions with packets against single
+/// rays, camera rays alone at 4 spp (AVX2 path): scene6_07 (40k
+/// triangles, 26°) 1.076 at 96 pixels (a pixel of 0.0048), 0.988 at 160
+/// (0.0029), 0.926 at 256 (0.0018); `scenes/mesh_knot_64k.txt` (40°)
+/// 1.095 at 96 (0.0076), 1.016 at 160 (0.0046), 0.963 at 256 (0.0028);
+/// the spheres of `scenes/whitted.txt` and the 15° gem of scene4_14 gain
+/// at every size (0.89-0.94). Fine meshes break even near 0.003: 243
+/// pixels wide at 40°, 154 at 26°.
+pub(super) const PACKET_PIXEL_SPAN: f32 = 0.003;
+
 /// The per-sample step of every loop: the camera ray through offset `o` of
 /// pixel `(i, j)` (screen `j` up), at the stream's time and lens point,
 /// traced by the integrator.
@@ -96,11 +110,14 @@ impl<I: Integrator> Step<'_, I> {
 
     /// Whether the camera rays of neighbouring pixels are worth tracing
     /// in packets (`World::intersect_packet`): the world's aggregate walks
-    /// packets, and the camera is a perspective one (pinhole or thin
-    /// lens). An orthographic camera's rays start at `t = −∞`, which the
-    /// packet walk takes one ray at a time.
+    /// packets, the camera is a perspective one (pinhole or thin lens; an
+    /// orthographic camera's rays start at `t = −∞`, which the packet walk
+    /// takes one ray at a time), and a pixel spans at most
+    /// [`PACKET_PIXEL_SPAN`].
     pub(super) fn packets(&self) -> bool {
-        self.world.walks_packets() && self.camera.tmin() >= 0.0
+        self.world.walks_packets()
+            && self.camera.tmin() >= 0.0
+            && self.camera.pixel_span(self.size) <= PACKET_PIXEL_SPAN
     }
 }
 
