@@ -14,8 +14,7 @@
 //! visit; an any-hit answer is a yes or a no.
 //!
 //! Packets whose rays do not share an octant or whose directions spread
-//! too far for tight bounds ([`MAX_SPREAD`] for any-hit packets,
-//! [`MAX_SPREAD_CLOSEST`] for closest-hit ones), and rays the single walk
+//! too far for tight bounds ([`MAX_SPREAD`]), and rays the single walk
 //! would take off the integer reduction (`RayData::reduce_as_ints`: a
 //! negative `tmin`, an origin far out), are walked one ray at a time.
 
@@ -40,21 +39,6 @@ pub const PACKET: usize = 8;
 /// its smallest magnitude, that the packet walk takes (see
 /// [`Frustum::new`]).
 const MAX_SPREAD: f32 = 0.125;
-
-/// [`MAX_SPREAD`] for the closest-hit walk, whose packets are camera rays
-/// from one point (or a lens) through neighbouring pixels: bounds loose
-/// along an axis where the rays' components are small cost the packet
-/// less than walking its rays alone. Eight pixels of a row of a 400-pixel
-/// image spread 1/8 at a sixth of the half-width from the centre column,
-/// so the any-hit walk's limit refused a third of such packets and every
-/// packet near the horizon. Callgrind, the render's instructions against
-/// single camera rays, whole 1-spp renders 400 pixels wide (AVX2 path),
-/// at limits 1/8, 1, 4 and none: scene6_07 with shadows −0.8%, −3.5%,
-/// −4.0%, −4.0%; scene4_14 −2.1%, −2.7%, −2.7%, −2.8%;
-/// `scenes/dof_row.txt` −0.2%, −4.1%, −4.5%, −4.6%;
-/// `scenes/mesh_knot_64k.txt` +0.5%, −1.3%, −1.4%, −1.7%. 4 keeps a
-/// bound on how far a packet's rays may fan out.
-const MAX_SPREAD_CLOSEST: f32 = 4.0;
 
 /// One ray of a packet: the ray and its `(tmin, tmax)` range.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,11 +84,9 @@ impl Frustum {
     /// The packet of `rays` and the rays it walks (bit `r`): those the
     /// single walk takes on its integer path (`RayData::reduce_as_ints`);
     /// `None` for the packet if those do not share an octant. Filler
-    /// lanes copy the first walked ray. A packet whose `1 / dir` spreads
-    /// more than `max_spread` times its magnitude along an axis is refused
-    /// too.
+    /// lanes copy the first walked ray.
     #[inline(always)]
-    fn new(rays: &[PacketRay], max_spread: f32) -> (Option<Frustum>, u32) {
+    fn new(rays: &[PacketRay]) -> (Option<Frustum>, u32) {
         // The rays' components as lanes (lanes past the packet copy its
         // last ray), and each one's `1 / dir` and `origin · inv` with the
         // operations of `RayData::inv_oi`, four lanes at a time.
@@ -173,7 +155,7 @@ impl Frustum {
         // enters. Such packets are walked one ray at a time.
         let tight = |l: &(Lanes, Lanes, Lanes)| {
             let (lo, hi) = (l.1[0], l.2[0]);
-            hi - lo <= max_spread * lo.abs().min(hi.abs())
+            hi - lo <= MAX_SPREAD * lo.abs().min(hi.abs())
         };
         if ![&x, &y, &z].into_iter().all(tight) {
             return (None, walked);
@@ -337,7 +319,7 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
     if tree.nodes.is_empty() || rays.is_empty() {
         return;
     }
-    let (f, walked) = Frustum::new(rays, MAX_SPREAD_CLOSEST);
+    let (f, walked) = Frustum::new(rays);
     let walked = if f.is_some() { walked } else { 0 };
     for (r, q) in rays.iter().enumerate() {
         if walked & 1 << r == 0 {
@@ -376,7 +358,7 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
         return 0;
     }
     debug_assert!(skip.is_empty() || skip.len() == rays.len());
-    let (f, walked) = Frustum::new(rays, MAX_SPREAD);
+    let (f, walked) = Frustum::new(rays);
     let walked = if f.is_some() { walked } else { 0 };
     let mut hit = 0u32;
     for (r, q) in rays.iter().enumerate() {

@@ -283,7 +283,7 @@ fn the_packet_box_test_keeps_every_box_its_rays_keep() {
                 )
             })
             .collect();
-        let (Some(f), walked) = Frustum::new(&rays, MAX_SPREAD) else {
+        let (Some(f), walked) = Frustum::new(&rays) else {
             continue;
         };
         assert_eq!(walked, 0xff);
@@ -368,10 +368,7 @@ fn packets_whose_rays_differ_in_dominant_axis_agree() {
                 .iter()
                 .fold(0u32, |m, q| m | 1 << dominant_axis(q.ray.dir));
             if axes.count_ones() > 1 {
-                assert!(
-                    Frustum::new(&p, MAX_SPREAD).0.is_some(),
-                    "walked as a packet"
-                );
+                assert!(Frustum::new(&p).0.is_some(), "walked as a packet");
                 mixed += 1;
             }
             packets.push(p);
