@@ -122,8 +122,8 @@ fn packet_hits_are_single_ray_hits() {
 }
 
 /// The loop takes packets on bvh8 where a pixel spans at most
-/// `PACKET_PIXEL_SPAN`: the knot's 40° camera at 317 pixels and above,
-/// not at 160; on other accelerators never.
+/// `PACKET_PIXEL_SPAN`: the knot's 40° camera at 403 pixels and above,
+/// not at 320; on other accelerators never.
 #[test]
 fn packets_are_taken_for_narrow_pixels_on_bvh8() {
     let scene = own("mesh_knot_1k.txt");
@@ -137,10 +137,10 @@ fn packets_are_taken_for_narrow_pixels_on_bvh8() {
             size,
         };
         let bvh8 = accel == AccelKind::Bvh8;
-        assert_eq!(step((317, 14)).packets(), bvh8);
+        assert_eq!(step((403, 14)).packets(), bvh8);
         assert_eq!(step((640, 480)).packets(), bvh8);
-        assert!(!step((160, 120)).packets());
-        assert_eq!(step((14, 317)).packets(), bvh8);
+        assert!(!step((320, 240)).packets());
+        assert_eq!(step((14, 403)).packets(), bvh8);
     }
 }
 
@@ -167,9 +167,9 @@ fn orthographic_cameras_take_no_packets() {
 /// (bands, the accumulator), 2 Sobol samples through a tent reaching over
 /// tile edges with the samples kept (tiles whose splats must come in the
 /// per-pixel order), and a piece of the frame (`render_region`). The image
-/// is a wide strip (317×14): eight pixels of a row are a narrow enough fan
+/// is a wide strip (403×14): eight pixels of a row are a narrow enough fan
 /// of rays for the packet walk only in images some hundreds of pixels
-/// wide (`bvh8::packet`'s spread limit).
+/// wide (`PACKET_PIXEL_SPAN`, and `bvh8::packet`'s spread limit).
 fn settings(size: (u32, u32)) -> Vec<(Settings, Option<Rect>)> {
     let one = Settings::one_ray(size, PixelOffset::CENTER);
     let four = Settings {
@@ -228,7 +228,7 @@ fn packets_render_as_single_rays<I: Integrator>(name: &str, integrator: impl Fn(
     let scene = own(name);
     let (world, camera) = world_of(&scene, AccelKind::Bvh8, true);
     let integrator = &integrator(&world);
-    for (s, region) in settings((317, 14)) {
+    for (s, region) in settings((403, 14)) {
         let packed = render_with(&world, &camera, integrator, (&s, region), 1);
         let costed = Settings {
             pixel_cost: true,

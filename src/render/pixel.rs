@@ -39,16 +39,15 @@ pub(super) const BLOCK: usize = 8;
 /// The widest pixel (radians between neighbouring pixels' rays:
 /// `CameraModel::pixel_span`) for which camera rays are traced in packets.
 /// Eight pixels of a row make a fan as wide as eight pixels: in a small
-/// image the packet's bounds are loose, and it enters boxes few of its
-/// rays enter. Callgrind, render instructions with packets against single
-/// rays, camera rays alone at 4 spp (AVX2 path): scene6_07 (40k
-/// triangles, 26°) 1.076 at 96 pixels (a pixel of 0.0048), 0.988 at 160
-/// (0.0029), 0.926 at 256 (0.0018); `scenes/mesh_knot_64k.txt` (40°)
-/// 1.095 at 96 (0.0076), 1.016 at 160 (0.0046), 0.963 at 256 (0.0028);
-/// the spheres of `scenes/whitted.txt` and the 15° gem of scene4_14 gain
-/// at every size (0.89-0.94). Fine meshes break even near 0.003: 243
-/// pixels wide at 40°, 154 at 26°.
-pub(super) const PACKET_PIXEL_SPAN: f32 = 0.003;
+/// image the packet's bounds are loose (or the walk refuses the packet
+/// for its spread and walks the rays alone, after the work of trying).
+/// Callgrind, render instructions of one binary with packets against
+/// without, camera rays alone at 4 spp (AVX2 path): scene6_07 (40k
+/// triangles, 26°) 1.056 at 96 pixels (a pixel of 0.0048), 1.040 at 160
+/// (0.0029), 1.000 at 256 (0.0018); `scenes/mesh_knot_64k.txt` (40°)
+/// 1.056 at 96 (0.0076), 1.026 at 160 (0.0046), 1.001 at 256 (0.0028).
+/// Both break even near 0.002: 364 pixels across at 40°, 231 at 26°.
+pub(super) const PACKET_PIXEL_SPAN: f32 = 0.002;
 
 /// The per-sample step of every loop: the camera ray through offset `o` of
 /// pixel `(i, j)` (screen `j` up), at the stream's time and lens point,
