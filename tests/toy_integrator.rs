@@ -5,7 +5,7 @@
 //! change to the render loop or the job.
 
 use crate::common::own_scene;
-use glint::integrator::{Branch, Integrator, RayKind, RayObserver, Trace};
+use glint::integrator::{Integrator, RayKind, RayObserver, Trace};
 use glint::math::{Ray, Vec3};
 use glint::render::{render_image, Adaptive, CameraModel, Control, Filter, PixelOffset, Settings};
 use glint::sampler::{Sampler, SamplerKind};
@@ -22,13 +22,8 @@ impl NormalsAsColours {
 }
 
 impl Integrator for NormalsAsColours {
-    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
-        cx.counters.primary += 1;
-        let hit = cx.world.intersect(ray, tmin, f32::INFINITY, cx.counters);
-        let t_end = hit.map_or(f32::INFINITY, |h| h.t);
-        cx.observer
-            .ray(Branch::CAMERA, ray, t_end, hit.map(|h| h.normal));
-        (hit.map_or(Vec3::ZERO, |h| Self::colour(h.normal)), hit)
+    fn li_hit<O: RayObserver>(&self, _: &mut Trace<O>, _: &Ray, _: f32, hit: Option<&Hit>) -> Vec3 {
+        hit.map_or(Vec3::ZERO, |h| Self::colour(h.normal))
     }
 }
 

@@ -47,7 +47,7 @@ mod work_tests;
 
 pub use brute::Brute;
 pub use bvh::Bvh;
-pub use bvh8::Bvh8;
+pub use bvh8::{Bvh8, PacketRay, PACKET};
 pub use grid::Grid;
 pub use hierarchy::{HierarchyBvh, SceneTree};
 pub use kind::{AccelKind, ParseAccelError, Split};
@@ -66,6 +66,10 @@ pub struct PrimHit {
     /// Index into the world's primitive list.
     pub prim: u32,
 }
+
+/// A closest hit with its barycentrics when the aggregate's own triangle
+/// test found it (see [`Aggregate::intersect_barycentric`]).
+pub type BaryHit = (PrimHit, Option<[f32; 3]>);
 
 /// A ray query against an aggregate: the primitives it indexes, the ray,
 /// and the open range `(tmin, tmax)` a hit must lie in.
@@ -124,6 +128,30 @@ pub trait Aggregate: Send + Sync {
         counters: &mut Counters,
     ) -> Option<(PrimHit, Option<[f32; 3]>)> {
         self.intersect(q, counters).map(|h| (h, None))
+    }
+
+    /// Whether [`intersect_packet`](Self::intersect_packet) walks its rays
+    /// together. When it does not (the default: ray by ray), a caller
+    /// gains nothing by gathering rays into packets.
+    fn walks_packets(&self) -> bool {
+        false
+    }
+
+    /// [`intersect_barycentric`](Self::intersect_barycentric) of each ray
+    /// of a packet (at most [`PACKET`]) against `prims`, into
+    /// `out[..rays.len()]`: each ray's answer alone, bit for bit. The
+    /// default asks ray by ray; the wide BVH walks the packet together
+    /// (`Bvh8::closest_packet`).
+    fn intersect_packet(
+        &self,
+        prims: &[Primitive],
+        rays: &[PacketRay],
+        out: &mut [Option<BaryHit>],
+        counters: &mut Counters,
+    ) {
+        for (q, o) in rays.iter().zip(out) {
+            *o = self.intersect_barycentric(Query::new(prims, &q.ray, q.tmin, q.tmax), counters);
+        }
     }
 
     /// Whether anything lies on the ray of `q` in its range (stops at the

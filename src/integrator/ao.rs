@@ -64,9 +64,15 @@ pub struct AmbientOcclusion {
 }
 
 impl Integrator for AmbientOcclusion {
-    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
-        let Some(h) = cx.closest(ray, tmin, Branch::CAMERA) else {
-            return (Vec3::ONE, None);
+    fn li_hit<O: RayObserver>(
+        &self,
+        cx: &mut Trace<O>,
+        ray: &Ray,
+        _: f32,
+        hit: Option<&Hit>,
+    ) -> Vec3 {
+        let Some(h) = hit else {
+            return Vec3::ONE;
         };
         // Both sides of a surface are tested: the one the ray sees.
         let n = if h.normal.dot(ray.dir) > 0.0 {
@@ -75,7 +81,7 @@ impl Integrator for AmbientOcclusion {
             h.normal
         };
         let f = unoccluded(cx, &h.surface_point(), n, ray.time, &self.settings, 0);
-        (Vec3::splat(f), Some(h))
+        Vec3::splat(f)
     }
 }
 

@@ -54,14 +54,23 @@ impl<O: RayObserver> Trace<'_, '_, O> {
     /// the observer as one at branch `b`.
     #[inline]
     pub fn closest(&mut self, ray: &Ray, tmin: f32, b: Branch) -> Option<Hit> {
-        count_ray(self.counters, b.kind);
         let hit = self
             .world
             .intersect(ray, tmin, f32::INFINITY, self.counters);
+        self.seen(ray, hit.as_ref(), b);
+        hit
+    }
+
+    /// Counts `ray`, a ray at branch `b` whose closest hit `hit` was found
+    /// elsewhere (a camera ray traced in a packet, `World::intersect_packet`),
+    /// and shows it to the observer: what [`closest`](Self::closest) does
+    /// besides the intersection.
+    #[inline]
+    pub fn seen(&mut self, ray: &Ray, hit: Option<&Hit>, b: Branch) {
+        count_ray(self.counters, b.kind);
         let t_end = hit.map_or(f32::INFINITY, |h| h.t);
         let normal = hit.map(|h| h.normal);
         self.observer.ray(b, ray, t_end, normal);
-        hit
     }
 
     /// Whether something blocks the shadow ray `ray` before `tmax`, but
@@ -78,18 +87,46 @@ impl<O: RayObserver> Trace<'_, '_, O> {
 }
 
 /// Radiance along camera rays: the one interface between the render loop and
-/// the light transport.
+/// the light transport. An integrator says what it makes of a camera ray's
+/// closest hit ([`li_hit`](Self::li_hit)); the camera ray itself is traced
+/// by [`li`](Self::li), or by the render loop together with its neighbours'
+/// (a packet: `World::intersect_packet`, the same hits bit for bit).
 pub trait Integrator: Sync {
     /// Colour seen along the camera ray `ray` (hits with `t > tmin`), and the
-    /// camera ray's hit (for the depth and normal planes).
-    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>);
+    /// camera ray's hit (for the depth and normal planes): the ray traced
+    /// ([`Trace::closest`] at [`Branch::CAMERA`]), then
+    /// [`li_hit`](Self::li_hit).
+    #[inline]
+    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
+        let hit = cx.closest(ray, tmin, Branch::CAMERA);
+        (self.li_hit(cx, ray, tmin, hit.as_ref()), hit)
+    }
+
+    /// The colour [`li`](Self::li) gives a camera ray already traced: `hit`
+    /// is its closest hit beyond `tmin` (`World::intersect(ray, tmin, ∞)`),
+    /// counted and shown to the observer ([`Trace::seen`]). By reference:
+    /// the hit is read where the world wrote it (a copy moved it with wide
+    /// loads of the world's narrow stores, which a CPU cannot forward).
+    fn li_hit<O: RayObserver>(
+        &self,
+        cx: &mut Trace<O>,
+        ray: &Ray,
+        tmin: f32,
+        hit: Option<&Hit>,
+    ) -> Vec3;
 }
 
 impl Integrator for Whitted {
     /// The classic tree takes no stream dimensions; area lights, glossy
     /// lobes and ambient occlusion take theirs as they are met.
     #[inline]
-    fn li<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, tmin: f32) -> (Vec3, Option<Hit>) {
-        self.trace_sampled(cx, ray, tmin, Branch::CAMERA)
+    fn li_hit<O: RayObserver>(
+        &self,
+        cx: &mut Trace<O>,
+        ray: &Ray,
+        _: f32,
+        hit: Option<&Hit>,
+    ) -> Vec3 {
+        self.shade_hit(cx, ray, hit, Branch::CAMERA)
     }
 }

@@ -574,12 +574,13 @@ fn sample_sphere_cone(p: Vec3, center: Vec3, radius: f32, u: Vec2) -> Option<Sur
 }
 
 impl Integrator for PathTracer {
-    fn li<O: RayObserver>(
+    fn li_hit<O: RayObserver>(
         &self,
         cx: &mut Trace<O>,
         camera_ray: &Ray,
         tmin: f32,
-    ) -> (Vec3, Option<Hit>) {
+        camera_hit: Option<&Hit>,
+    ) -> Vec3 {
         let world = cx.world;
         let s = &self.settings;
         let background = world.background().color;
@@ -588,7 +589,6 @@ impl Integrator for PathTracer {
         let mut ray = *camera_ray;
         let mut ray_tmin = tmin;
         let mut kind = RayKind::Primary;
-        let mut first_hit = None;
         // The previous vertex: where the ray left, the BSDF density of its
         // direction, and whether it came from a delta lobe.
         let mut prev: Option<(Vec3, f32, bool)> = None;
@@ -597,17 +597,22 @@ impl Integrator for PathTracer {
         // `settings.caustics` drops, and whether light found now (through
         // delta lobes since that vertex) is one.
         let (mut from_dropping, mut dropped) = (false, false);
+        // The camera ray's hit is given; the path's other rays are traced.
+        let mut given = Some(camera_hit);
         loop {
             let weight = beta.max_element();
-            let hit = cx.closest(
-                &ray,
-                ray_tmin,
-                Branch {
-                    kind,
-                    depth,
-                    weight,
-                },
-            );
+            let hit = match given.take() {
+                Some(hit) => hit.copied(),
+                None => cx.closest(
+                    &ray,
+                    ray_tmin,
+                    Branch {
+                        kind,
+                        depth,
+                        weight,
+                    },
+                ),
+            };
             // The scene's area lights: emitting surfaces that do not block
             // (shadow rays pass through them too), crossed before the hit.
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
@@ -647,9 +652,6 @@ impl Integrator for PathTracer {
                 }
                 break;
             };
-            if depth == 0 {
-                first_hit = Some(h);
-            }
             let mut scratch = None;
             let m = self.material(world, h.material, h.instance, h.point, &mut scratch);
             let le = self.emitted(m, &h, &ray);
@@ -755,7 +757,7 @@ impl Integrator for PathTracer {
             ray = spawn.spawn_ray(bs.wi).at_time(camera_ray.time);
             ray_tmin = 0.0;
         }
-        (radiance, first_hit)
+        radiance
     }
 }
 

@@ -103,11 +103,23 @@ impl Whitted {
         // 4-byte stores, which a CPU cannot forward (a stall at every hit;
         // perf, scene6_07 at 16 spp: a third of this function's own time).
         let hit = cx.closest(ray, tmin, b);
-        let color = match &hit {
+        (self.shade_hit(cx, ray, hit.as_ref(), b), hit)
+    }
+
+    /// The colour [`trace_sampled`](Self::trace_sampled) gives `ray` at
+    /// branch `b` once its closest hit `hit` is known.
+    #[inline(always)]
+    pub(super) fn shade_hit<O: RayObserver>(
+        &self,
+        cx: &mut Trace<O>,
+        ray: &Ray,
+        hit: Option<&Hit>,
+        b: Branch,
+    ) -> Vec3 {
+        match hit {
             None => cx.world.background().color,
             Some(h) => self.shade(cx, ray, h, b),
-        };
-        (color, hit)
+        }
     }
 
     fn shade<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, hit: &Hit, b: Branch) -> Vec3 {

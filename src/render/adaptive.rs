@@ -378,13 +378,14 @@ mod tests {
     struct StreamValue;
 
     impl Integrator for StreamValue {
-        fn li<O: crate::integrator::RayObserver>(
+        fn li_hit<O: crate::integrator::RayObserver>(
             &self,
             cx: &mut crate::integrator::Trace<O>,
             _: &crate::math::Ray,
             _: f32,
-        ) -> (Vec3, Option<crate::world::Hit>) {
-            (Vec3::splat(cx.stream.next_1d()), None)
+            _: Option<&crate::world::Hit>,
+        ) -> Vec3 {
+            Vec3::splat(cx.stream.next_1d())
         }
     }
 

@@ -235,6 +235,14 @@ impl CameraModel {
         (p - self.center).dot(self.direction)
     }
 
+    /// The width of one pixel of a `w`×`h` image on the screen plane: for a
+    /// perspective camera at unit distance along the viewing direction
+    /// (the angle between neighbouring pixels' rays near the centre, in
+    /// radians), for an orthographic one in world units.
+    pub fn pixel_span(&self, (w, h): (u32, u32)) -> f32 {
+        self.span / w.max(h).max(1) as f32
+    }
+
     /// Whether the camera is perspective (else orthographic).
     pub fn is_perspective(&self) -> bool {
         self.perspective

@@ -377,6 +377,8 @@ pub fn normal_rgb(n: Vec3) -> Vec3 {
 }
 
 #[cfg(test)]
+mod packet_tests;
+#[cfg(test)]
 mod tests {
     use super::*;
     use crate::integrator::Whitted;

@@ -17,7 +17,7 @@ mod build;
 pub use crate::primitive::Primitive;
 pub use build::BuildOptions;
 
-use crate::accel::{Aggregate, Query};
+use crate::accel::{Aggregate, PacketRay, Query, PACKET};
 use crate::light::{EmitterHit, Incident, LightSource};
 use crate::math::{Aabb, Mat4, Ray, SurfacePoint, Vec3};
 use crate::scene::{Background, Camera, Material, RenderLight};
@@ -195,8 +195,48 @@ impl World {
 
     /// Closest hit with `tmin < t < tmax`.
     pub fn intersect(&self, ray: &Ray, tmin: f32, tmax: f32, c: &mut Counters) -> Option<Hit> {
-        let mut best =
-            (self.accel).intersect_barycentric(Query::new(&self.prims, ray, tmin, tmax), c);
+        let best = (self.accel).intersect_barycentric(Query::new(&self.prims, ray, tmin, tmax), c);
+        self.finish_hit(ray, tmin, tmax, best, c)
+    }
+
+    /// Whether [`intersect_packet`](Self::intersect_packet) walks a
+    /// packet's rays together: the aggregate is the wide BVH (`bvh8`, the
+    /// default; its non-triangle items, spheres, moving or transformed
+    /// shapes, are tested ray by ray at its leaves). Other aggregates
+    /// answer ray by ray, so a caller need not gather rays for them.
+    pub fn walks_packets(&self) -> bool {
+        self.accel.walks_packets()
+    }
+
+    /// The closest hit of each ray of a packet (at most [`PACKET`] rays,
+    /// each in its own `(tmin, tmax)`) into `out[..rays.len()]`: for each,
+    /// what [`intersect`](Self::intersect) gives it alone, bit for bit
+    /// (`Aggregate::intersect_packet`, then the unbounded primitives and
+    /// the hit record ray by ray).
+    ///
+    /// # Panics
+    /// If `rays` holds more than [`PACKET`] rays or `out` fewer than `rays`.
+    pub fn intersect_packet(&self, rays: &[PacketRay], out: &mut [Option<Hit>], c: &mut Counters) {
+        assert!(rays.len() <= PACKET && out.len() >= rays.len());
+        let mut found = [None; PACKET];
+        let found = &mut found[..rays.len()];
+        (self.accel).intersect_packet(&self.prims, rays, found, c);
+        for ((q, best), o) in rays.iter().zip(found.iter()).zip(out) {
+            *o = self.finish_hit(&q.ray, q.tmin, q.tmax, *best, c);
+        }
+    }
+
+    /// The closest hit of `ray` given the aggregate's `best`: the unbounded
+    /// primitives tested before it, then the hit record of the nearest.
+    #[inline(always)]
+    fn finish_hit(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        mut best: Option<crate::accel::BaryHit>,
+        c: &mut Counters,
+    ) -> Option<Hit> {
         let mut tmax = best.map_or(tmax, |h| h.0.t);
         for &i in &self.unbounded {
             c.intersection_tests += 1;

@@ -360,6 +360,24 @@ impl Aggregate for Bvh8 {
         self.closest_query(q.prims, &q, c)
     }
 
+    fn walks_packets(&self) -> bool {
+        true
+    }
+
+    fn intersect_packet(
+        &self,
+        prims: &[Primitive],
+        rays: &[PacketRay],
+        out: &mut [Option<super::BaryHit>],
+        c: &mut Counters,
+    ) {
+        let mut hits = [None; PACKET];
+        self.closest_hit_packet(prims, rays, &mut hits, c);
+        for (o, h) in out.iter_mut().zip(&hits[..rays.len()]) {
+            *o = h.map(|h| (PrimHit { t: h.t, prim: h.id }, h.bary));
+        }
+    }
+
     fn occluded(&self, q: Query, c: &mut Counters) -> bool {
         self.occluded_except(q, NO_ITEM, c)
     }

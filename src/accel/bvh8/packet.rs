@@ -323,10 +323,19 @@ pub(crate) fn closest<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const
     let walked = if f.is_some() { walked } else { 0 };
     for (r, q) in rays.iter().enumerate() {
         if walked & 1 << r == 0 {
+            // The single walk's choice of arithmetic (`ClosestHit::walk`):
+            // a packet the frustum refuses costs its rays no more than
+            // their own walks.
             let rd = &RayData::new(&q.ray);
-            out[r] = traverse::closest::<S, F, B, N, ANY_OCTANT, false>(
-                bt, tree, rd, q.tmin, q.tmax, stats,
-            );
+            out[r] = if rd.reduce_as_ints(q.tmin) {
+                traverse::closest::<S, F, B, N, ANY_OCTANT, true>(
+                    bt, tree, rd, q.tmin, q.tmax, stats,
+                )
+            } else {
+                traverse::closest::<S, F, B, N, ANY_OCTANT, false>(
+                    bt, tree, rd, q.tmin, q.tmax, stats,
+                )
+            };
         }
     }
     if let Some(f) = f {
