@@ -426,12 +426,11 @@ impl<'a, I: Integrator> Supersample<'a, I> {
         }
     }
 
-    /// The camera sample `k` of pixel `(i, j)`: its stream (past the
-    /// camera's dimensions), in-pixel offset, filter weight and ray.
+    /// A camera sample's in-pixel offset and filter weight, taken from
+    /// (or, when fixed, skipped in) its stream.
     #[inline(always)]
-    fn camera_sample(&self, (i, j): (u32, u32), k: u32) -> (SampleStream<'a>, Vec2, f32, Ray) {
-        let mut stream = self.sampler.stream((i, j), k);
-        let (o, wt) = match self.fixed {
+    fn offset(&self, stream: &mut SampleStream<'a>) -> (Vec2, f32) {
+        match self.fixed {
             Some(f) => {
                 stream.skip();
                 f
@@ -440,7 +439,15 @@ impl<'a, I: Integrator> Supersample<'a, I> {
                 let o = stream.next_2d();
                 (o, self.filter.weight(o.x - 0.5, o.y - 0.5))
             }
-        };
+        }
+    }
+
+    /// The camera sample `k` of pixel `(i, j)`: its stream (past the
+    /// camera's dimensions), in-pixel offset, filter weight and ray.
+    #[inline(always)]
+    fn camera_sample(&self, (i, j): (u32, u32), k: u32) -> (SampleStream<'a>, Vec2, f32, Ray) {
+        let mut stream = self.sampler.stream((i, j), k);
+        let (o, wt) = self.offset(&mut stream);
         let ray = self.step.ray((i, j, o), &mut stream);
         (stream, o, wt, ray)
     }
@@ -566,16 +573,7 @@ impl<I: Integrator> PixelStrategy for Supersample<'_, I> {
         let mut acc = Accumulator::EMPTY;
         for k in 0..spp {
             let mut stream = self.sampler.stream((i, j), k);
-            let (o, wt) = match self.fixed {
-                Some(f) => {
-                    stream.skip();
-                    f
-                }
-                None => {
-                    let o = stream.next_2d();
-                    (o, self.filter.weight(o.x - 0.5, o.y - 0.5))
-                }
-            };
+            let (o, wt) = self.offset(&mut stream);
             let (c, hit) = self.step.sample((i, j, o), &mut stream, counters);
             if spreads {
                 sink.splat(x, row, o, c);
