@@ -43,12 +43,15 @@ if [ "${1:-}" = path ]; then
   echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
   echo "| scene | glint spp | glint s | glint samples/s | glint rays/s | glint RMSE | Mitsuba spp | Mitsuba s | Mitsuba samples/s | Mitsuba RMSE | RMSE glint/Mitsuba | reference noise | same, noise removed | at equal time | same, noise removed |"
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-  for name in cornell_box cornell_caustics mesh_sphere_light; do
+  photons=${PHOTONS:-500000}
+  for entry in cornell_box cornell_caustics mesh_sphere_light "cornell_caustics --caustic-photons $photons"; do
+    name=${entry%% *}
+    read -ra flags <<<"${entry#"$name"}"
     twin() { "$venv/bin/python" scripts/mitsuba_twin.py "scenes/$name.txt" "$tmp/m.exr" --size 128 --threads 2 --seed 7 --spp "$1" | sed -E 's/.*: ([0-9.]+) s/\1/'; }
     tgs=(); t16s=(); tms=()
     for _ in $(seq 1 "$reps"); do
       ./target/release/glint render "scenes/$name.txt" -o "$tmp/g.exr" --size 128 128 --integrator path \
-        --spp "$spp" --threads 2 --quiet --stats-json "$tmp/g.json" >/dev/null
+        --spp "$spp" --threads 2 --quiet --stats-json "$tmp/g.json" "${flags[@]}" >/dev/null
       tgs+=("$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['render_ms']/1e3)" "$tmp/g.json")")
       t16s+=("$(twin 16)")
     done
@@ -57,12 +60,12 @@ if [ "${1:-}" = path ]; then
     mspp=$(python3 -c "import sys; print(max(1, round(16 * float(sys.argv[1]) / float(sys.argv[2]))))" "$tg" "$t16")
     for _ in $(seq 1 "$reps"); do tms+=("$(twin "$mspp")"); done
     tm=$(median "${tms[@]}")
-    "$venv/bin/python" - "$name" "$tmp" "$spp" "$tg" "$mspp" "$tm" <<'PY'
+    "$venv/bin/python" - "$name" "$tmp" "$spp" "$tg" "$mspp" "$tm" "$entry" <<'PY'
 import json, sys
 import numpy as np
 import mitsuba as mi
 mi.set_variant("scalar_rgb")
-name, tmp, spp, tg, mspp, tm = sys.argv[1:7]
+name, tmp, spp, tg, mspp, tm, label = sys.argv[1:8]
 read = lambda p: np.array(mi.Bitmap(p)).astype(np.float64)[..., :3]
 ref = read(f"tests/mitsuba/{name}_ref.exr")
 rmse = lambda a: float(np.sqrt(((a - ref) ** 2).mean()))
@@ -75,7 +78,7 @@ ref_var = float(((s1 - s2) ** 2).mean() / 2) * 64 / 1024
 clean = lambda e: max(e * e - ref_var, 0.0) ** 0.5
 # Mitsuba's RMSE had it run exactly glint's time (its variance scales as 1/time).
 scale = (tm / tg) ** 0.5
-print(f"| {name} | {spp} | {tg:.2f} | {px * int(spp) / tg:,.0f} | {stats['rays_total'] / tg:,.0f} | {g:.4f} "
+print(f"| {label} | {spp} | {tg:.2f} | {px * int(spp) / tg:,.0f} | {stats['rays_total'] / tg:,.0f} | {g:.4f} "
       f"| {mspp} | {tm:.2f} | {px * int(mspp) / tm:,.0f} | {m:.4f} | {g / m:.2f} "
       f"| {ref_var ** 0.5:.4f} | {clean(g) / clean(m):.2f} "
       f"| {g / (m * scale):.2f} | {clean(g) / (clean(m) * scale):.2f} |")

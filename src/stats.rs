@@ -18,6 +18,8 @@ pub struct Counters {
     pub glossy: u64,
     /// Ambient-occlusion hemisphere rays.
     pub occlusion: u64,
+    /// Rays of photons from the lights (the path tracer's caustic map).
+    pub photon: u64,
     /// Ray–primitive intersection tests.
     pub intersection_tests: u64,
     /// Accelerator nodes or grid cells visited.
@@ -27,7 +29,7 @@ pub struct Counters {
 impl Counters {
     /// All rays of every kind.
     pub fn rays_total(&self) -> u64 {
-        self.primary + self.shadow + self.reflected + self.refracted + self.occlusion
+        self.primary + self.shadow + self.reflected + self.refracted + self.occlusion + self.photon
     }
 }
 
@@ -39,6 +41,7 @@ impl AddAssign for Counters {
         self.refracted += o.refracted;
         self.glossy += o.glossy;
         self.occlusion += o.occlusion;
+        self.photon += o.photon;
         self.intersection_tests += o.intersection_tests;
         self.nodes_visited += o.nodes_visited;
     }

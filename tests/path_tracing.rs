@@ -278,15 +278,13 @@ impl Twin {
     /// glint at 128×128, 64 samples per pixel (Sobol), as the tests compare
     /// it: the same sample count as the two Mitsuba seeds.
     fn check(&self) {
+        self.check_with(PathSettings::default());
+    }
+
+    /// [`check`](Self::check) with the path tracer's `settings`.
+    fn check_with(&self, settings: PathSettings) {
         let scene = own_scene(&format!("{}.txt", self.name));
-        let ours = render(
-            &scene,
-            128,
-            64,
-            SamplerKind::Sobol,
-            PathSettings::default(),
-            2,
-        );
+        let ours = render(&scene, 128, 64, SamplerKind::Sobol, settings, 2);
         let right = self.compare(&ours, "ref");
         eprintln!(
             "{} vs Mitsuba: {right:?} (worst block at {:.2} of its tolerance)",
@@ -319,6 +317,50 @@ fn cornell_caustics_agrees_with_mitsuba() {
         name: "cornell_caustics",
     }
     .check();
+}
+
+/// The caustic photon map (500,000 photons, as `scripts/bench-vs-mitsuba.sh
+/// path` times it) in place of the caustic paths: the same check, the
+/// same wrong twins rejected.
+#[test]
+fn cornell_caustics_with_the_caustic_map_agrees_with_mitsuba() {
+    Twin {
+        name: "cornell_caustics",
+    }
+    .check_with(mapped(500_000));
+}
+
+/// The path tracer's defaults with a caustic map of `photons` photons.
+fn mapped(photons: u32) -> PathSettings {
+    let mut s = PathSettings::default();
+    s.caustic_map.photons = photons;
+    s
+}
+
+/// The caustic map is consistent: its error against the Mitsuba reference
+/// falls as photons grow (its blur and its noise both shrink), and at 64
+/// samples per pixel it is below the paths' (which carry the caustics as
+/// noise); one and two threads give the same bits; a scene without mirror
+/// or glass gets no map (the same bits as without it).
+#[test]
+fn caustic_map_converges_and_is_deterministic() {
+    let scene = own_scene("cornell_caustics.txt");
+    let reference =
+        read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mitsuba/cornell_caustics_ref.exr"));
+    let at = |settings: PathSettings, threads: usize| {
+        render(&scene, 128, 64, SamplerKind::Sobol, settings, threads)
+    };
+    let paths = rmse(&at(PathSettings::default(), 2), &reference);
+    let few = rmse(&at(mapped(25_000), 2), &reference);
+    let many_img = at(mapped(800_000), 2);
+    let many = rmse(&many_img, &reference);
+    eprintln!("RMSE against the reference: paths {paths:.5}, 25k photons {few:.5}, 800k {many:.5}");
+    assert!(many < 0.9 * few, "{many} vs {few}");
+    assert!(many < 0.7 * paths, "{many} vs {paths}");
+    assert_eq!(bits(&at(mapped(800_000), 1)), bits(&many_img));
+    let plain = own_scene("cornell_box.txt");
+    let p = |settings| render(&plain, 32, 4, SamplerKind::Sobol, settings, 2);
+    assert_eq!(bits(&p(mapped(100_000))), bits(&p(PathSettings::default())));
 }
 
 #[test]
@@ -1040,4 +1082,95 @@ fn caustic_paths_carry_most_of_the_caustic_box_noise() {
         v_all - v_seen < v_seen - v_none,
         "{v_all} {v_seen} {v_none}"
     );
+}
+
+/// Both command lines take the photon count (`glint render
+/// --caustic-photons N`, `raytracer -caustic_photons N`) and render the
+/// same bits with it, different from without; a bad count is refused
+/// naming the flag, with nothing written.
+#[test]
+fn both_command_lines_take_the_caustic_photons() {
+    let dir = scratch("caustic_photons_cli");
+    let scene = own_scene("cornell_caustics.txt");
+    let scene = scene.to_str().unwrap();
+    let run = |exe: &str, args: &[&str]| {
+        std::process::Command::new(exe)
+            .args(args)
+            .current_dir(&*dir)
+            .output()
+            .unwrap()
+    };
+    let glint = env!("CARGO_BIN_EXE_glint");
+    let raytracer = env!("CARGO_BIN_EXE_raytracer");
+    let common = [
+        "--size",
+        "24",
+        "16",
+        "--integrator",
+        "path",
+        "--spp",
+        "4",
+        "--quiet",
+    ];
+    for (out, extra) in [
+        ("g.exr", &["--caustic-photons", "5000"][..]),
+        ("g0.exr", &[][..]),
+    ] {
+        let o = run(
+            glint,
+            &[&["render", scene, "-o", out][..], &common, extra].concat(),
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let o = run(
+        raytracer,
+        &[
+            "-input",
+            scene,
+            "-output",
+            "r.exr",
+            "-size",
+            "24",
+            "16",
+            "-integrator",
+            "path",
+            "-sobol_samples",
+            "4",
+            "-caustic_photons",
+            "5000",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read = |f: &str| std::fs::read(dir.join(f)).unwrap();
+    assert_eq!(read("g.exr"), read("r.exr"));
+    assert_ne!(read("g.exr"), read("g0.exr"));
+    let o = run(
+        raytracer,
+        &[
+            "-input",
+            scene,
+            "-output",
+            "bad.exr",
+            "-integrator",
+            "path",
+            "-caustic_photons",
+            "many",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("-caustic_photons"),
+        "{err}"
+    );
+    assert!(!dir.join("bad.exr").exists());
+    let o = run(
+        glint,
+        &["render", scene, "-o", "bad.exr", "--caustic-photons", "many"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--caustic-photons"),
+        "{err}"
+    );
+    assert!(!dir.join("bad.exr").exists());
 }

@@ -112,6 +112,9 @@ fn one_four_and_seven_pieces_merge_bit_for_bit() {
         pieces_equal_single(&dir, "whitted.txt", &wide, n);
         pieces_equal_single(&dir, "mesh_knot_1k.txt", &random, n);
         pieces_equal_single(&dir, "cornell_caustics.txt", &path, n);
+        // The caustic photon map: every piece builds the same one.
+        let mapped = [&path[..], &["--caustic-photons", "20000"]].concat();
+        pieces_equal_single(&dir, "cornell_caustics.txt", &mapped, n);
     }
     // A crop's pixels equal the whole render's in that rectangle.
     let scene = own_scene("whitted.txt").to_string_lossy().into_owned();

@@ -184,6 +184,11 @@ const FLAGS: &[(&str, &str, &str)] = &[
         "NAME",
         "what to compute: whitted (the shaded image, the default), ao (the grey ambient-occlusion image) or path (path tracing with light sampling and MIS; -bounces then limits the scattering events per path, default 64)",
     ),
+    (
+        "-caustic_photons",
+        "N",
+        "with -integrator path: N photons from the emitting primitives into a caustic photon map, which carries the light they send through mirrors and glass onto other surfaces (biased: blurred over a few photons' distance; default 0: paths carry every caustic)",
+    ),
     ("-help", "", "print this help (also -h, --help)"),
 ];
 
@@ -380,6 +385,10 @@ fn parse(args: &[String]) -> Result<(Job, bool, bool), String> {
             job.shading.bounces = p.max_bounces;
         }
         p.max_bounces = job.shading.bounces;
+        if let Some(i) = args.iter().rposition(|a| a == "-caustic_photons") {
+            let n = args.get(i + 1).ok_or("-caustic_photons: a photon count")?;
+            p.caustic_map.photons = number("-caustic_photons", n)?;
+        }
     }
     job.input = input.ok_or("missing -input SCENE")?;
     job.validate(FlagNames::Course).map_err(|e| e.to_string())?;
@@ -479,6 +488,10 @@ fn sampling_flag(job: &mut Job, flag: &str, value: Value) -> Result<bool, String
         // depends on -integrator and -adaptive.
         "-max_depth" | "-adaptive_depth" => {
             number::<u32>(flag, value("a depth")?)?;
+        }
+        // Read again after the loop: it applies to -integrator path.
+        "-caustic_photons" => {
+            number::<u32>(flag, value("a photon count")?)?;
         }
         _ => return Ok(false),
     }

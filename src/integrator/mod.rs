@@ -4,6 +4,7 @@
 //! (ambient occlusion, path tracing) plug in without touching the loop.
 
 pub mod ao;
+pub mod caustic_map;
 mod kind;
 mod observer;
 pub mod optics;

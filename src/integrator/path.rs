@@ -42,6 +42,7 @@
 //! it lowers the variance at equal samples by a third for 10% more rays
 //! (docs/path-tracing.md).
 
+use super::caustic_map::{CausticMap, CausticSettings, Source};
 use super::{Branch, Integrator, RayKind, RayObserver, Trace};
 use crate::bsdf::Bsdf;
 use crate::light::{incident, LightPoint};
@@ -123,6 +124,10 @@ pub struct PathSettings {
     pub texture_space: TextureSpace,
     /// Which caustic paths count ([`CausticPaths::Keep`]: all).
     pub caustics: CausticPaths,
+    /// The caustic photon map: with photons, the caustics from emitting
+    /// primitives come from it instead of from paths
+    /// ([`super::caustic_map`]).
+    pub caustic_map: CausticSettings,
 }
 
 impl Default for PathSettings {
@@ -137,6 +142,7 @@ impl Default for PathSettings {
             light_choice: LightChoice::Power,
             texture_space: TextureSpace::World,
             caustics: CausticPaths::Keep,
+            caustic_map: CausticSettings::default(),
         }
     }
 }
@@ -166,6 +172,8 @@ pub struct PathTracer {
     pmf: Vec<f32>,
     /// Running sums of `pmf`, the last exactly 1.
     cdf: Vec<f32>,
+    /// The caustic photon map, when its settings ask for photons.
+    caustic_map: Option<std::sync::Arc<CausticMap>>,
 }
 
 /// A light sample: direction, radiance arriving divided by nothing, the
@@ -246,6 +254,7 @@ impl PathTracer {
             light_count,
             pmf: Vec::new(),
             cdf: Vec::new(),
+            caustic_map: None,
         };
         let weights: Vec<f64> = (0..light_count)
             .map(|k| match settings.light_choice {
@@ -272,7 +281,62 @@ impl PathTracer {
             tracer.pmf = vec![0.0; light_count];
             tracer.cdf = vec![1.0; light_count];
         }
+        // (No delta lobe anywhere: no caustic, no photon pass.)
+        let delta = world.materials().iter().any(|m| match m {
+            Material::Phong(p) => Bsdf::from_phong(p, Vec3::Z)
+                .lobes()
+                .iter()
+                .any(|l| l.is_delta()),
+            _ => false,
+        });
+        if settings.caustic_map.photons > 0 && delta {
+            tracer.caustic_map = tracer.build_caustic_map(world);
+        }
         tracer
+    }
+
+    /// The caustic photon map of the emitting primitives, each chosen by
+    /// its power; `None` when none sends anything.
+    fn build_caustic_map(&self, world: &World) -> Option<std::sync::Arc<CausticMap>> {
+        let powers: Vec<f32> = (0..self.emitters.len())
+            .map(|k| self.light_power(world, k))
+            .map(|w| if w.is_finite() && w > 0.0 { w } else { 0.0 })
+            .collect();
+        let total: f32 = powers.iter().sum();
+        if total <= 0.0 {
+            return None;
+        }
+        let sources: Vec<Source> = self
+            .emitters
+            .iter()
+            .zip(&powers)
+            .map(|(e, &w)| {
+                let prim = match *e {
+                    Emitter::Triangle { prim, .. } | Emitter::Sphere { prim } => prim,
+                };
+                let m = world.prims()[prim as usize].material as usize;
+                Source {
+                    prim,
+                    emission: max_emission(world.materials(), m, 0),
+                    probability: w / total,
+                }
+            })
+            .collect();
+        let material = |material: u32, instance: u32, p: Vec3| {
+            let mut scratch = None;
+            *self.material(world, material, instance, p, &mut scratch)
+        };
+        Some(std::sync::Arc::new(CausticMap::build(
+            world,
+            &sources,
+            self.settings.caustic_map,
+            material,
+        )))
+    }
+
+    /// The caustic photon map, if the settings asked for one.
+    pub fn caustic_map(&self) -> Option<&CausticMap> {
+        self.caustic_map.as_deref()
     }
 
     /// An estimate of the power light `k` sends (emitters first, then the
@@ -597,6 +661,10 @@ impl Integrator for PathTracer {
         // `settings.caustics` drops, and whether light found now (through
         // delta lobes since that vertex) is one.
         let (mut from_dropping, mut dropped) = (false, false);
+        // Whether light found now reached the path through delta lobes
+        // since a non-delta vertex: the caustic map's light, when there is
+        // one (then the emitting primitives' light is not added again).
+        let (mut from_mapped, mut mapped) = (false, false);
         // The camera ray's hit is given; the path's other rays are traced.
         let mut given = Some(camera_hit);
         loop {
@@ -655,7 +723,12 @@ impl Integrator for PathTracer {
             let mut scratch = None;
             let m = self.material(world, h.material, h.instance, h.point, &mut scratch);
             let le = self.emitted(m, &h, &ray);
-            if le != Vec3::ZERO && !dropped {
+            let skip = mapped
+                && self
+                    .emitter_of_prim
+                    .get(h.prim as usize)
+                    .is_some_and(|&k| k != u32::MAX);
+            if le != Vec3::ZERO && !dropped && !skip {
                 let w = match prev {
                     None | Some((_, _, true)) => 1.0,
                     Some((p, pdf_bsdf, false)) => {
@@ -683,6 +756,13 @@ impl Integrator for PathTracer {
             let bsdf = Bsdf::from_phong(m, h.normal);
             let wo = -ray.dir.normalize();
             let mut spawn = Spawn::leaving(h.surface_point(), h.prim);
+            if let (Some(map), false) = (&self.caustic_map, bsdf.is_delta()) {
+                let c = beta * map.radiance(h.point, h.normal, wo, &bsdf);
+                if c != Vec3::ZERO {
+                    radiance += c;
+                    cx.observer.light(1.0, c);
+                }
+            }
             if s.strategy != Strategy::Bsdf && !bsdf.is_delta() {
                 if let Some((ls, choose)) = self.sample_light(
                     world,
@@ -753,6 +833,8 @@ impl Integrator for PathTracer {
                 };
             }
             dropped = from_dropping && bs.delta;
+            from_mapped |= !bs.delta && self.caustic_map.is_some();
+            mapped = from_mapped && bs.delta;
             prev = Some((h.point, bs.pdf, bs.delta));
             ray = spawn.spawn_ray(bs.wi).at_time(camera_ray.time);
             ray_tmin = 0.0;

@@ -157,13 +157,20 @@ impl Job {
         let rendered = pool.install(|| match self.integrator {
             IntegratorKind::Whitted => stage.render(&self.whitted(scene, samples)),
             IntegratorKind::Ao => stage.render(&ambient_occlusion(scene, samples)),
-            IntegratorKind::Path(p) => stage.render(&PathTracer::new(
-                world,
-                PathSettings {
-                    texture_space: self.shading.texture_space,
-                    ..p
-                },
-            )),
+            IntegratorKind::Path(p) => {
+                let tracer = PathTracer::new(
+                    world,
+                    PathSettings {
+                        texture_space: self.shading.texture_space,
+                        ..p
+                    },
+                );
+                let mut rendered = stage.render(&tracer);
+                if let Some(map) = tracer.caustic_map() {
+                    rendered.counters += map.counters;
+                }
+                rendered
+            }
         });
         Ok(Traced {
             rendered,

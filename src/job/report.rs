@@ -69,6 +69,8 @@ pub struct Stats {
     pub rays_glossy: u64,
     /// Ambient-occlusion rays.
     pub rays_occlusion: u64,
+    /// Photon rays (the path tracer's caustic map).
+    pub rays_photon: u64,
     /// All rays.
     pub rays_total: u64,
     /// Ray–primitive intersection tests.
@@ -114,6 +116,7 @@ impl Report {
             rays_refracted: c.refracted,
             rays_glossy: c.glossy,
             rays_occlusion: c.occlusion,
+            rays_photon: c.photon,
             rays_total: c.rays_total(),
             intersection_tests: c.intersection_tests,
             nodes_visited: c.nodes_visited,
@@ -153,6 +156,9 @@ impl Report {
         line("refracted rays", st.rays_refracted.to_string());
         line("  of which glossy", st.rays_glossy.to_string());
         line("occlusion rays", st.rays_occlusion.to_string());
+        if st.rays_photon > 0 {
+            line("photon rays", st.rays_photon.to_string());
+        }
         line("rays total", st.rays_total.to_string());
         line("intersection tests", st.intersection_tests.to_string());
         line("nodes visited", st.nodes_visited.to_string());
