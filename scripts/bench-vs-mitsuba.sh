@@ -20,6 +20,9 @@
 #         machine can still make the two times differ, so the last two columns scale Mitsuba's RMSE
 #         to glint's time first (RMSE ~ 1/sqrt(time) at a fixed sampler: x sqrt(Mitsuba s / glint s)):
 #         the ratio at exactly equal time, without and with the reference's noise taken out.
+#         The last row is the caustic box again with the caustic photon map (`--caustic-photons`,
+#         the photon pass inside glint's time): PHOTONS="N ..." sets the counts (default 500000),
+#         one row each; ONLY_PHOTONS=1 leaves out the three rows without it.
 #   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
 #         `pip install mitsuba` (and numpy, which `path` reads the images with) on first use)
 #   REPS  repetitions (default 3): medians are reported
@@ -43,8 +46,10 @@ if [ "${1:-}" = path ]; then
   echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
   echo "| scene | glint spp | glint s | glint samples/s | glint rays/s | glint RMSE | Mitsuba spp | Mitsuba s | Mitsuba samples/s | Mitsuba RMSE | RMSE glint/Mitsuba | reference noise | same, noise removed | at equal time | same, noise removed |"
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-  photons=${PHOTONS:-500000}
-  for entry in cornell_box cornell_caustics mesh_sphere_light "cornell_caustics --caustic-photons $photons"; do
+  entries=(cornell_box cornell_caustics mesh_sphere_light)
+  for n in ${PHOTONS:-500000}; do entries+=("cornell_caustics --caustic-photons $n"); done
+  [ -z "${ONLY_PHOTONS:-}" ] || entries=("${entries[@]:3}")
+  for entry in "${entries[@]}"; do
     name=${entry%% *}
     read -ra flags <<<"${entry#"$name"}"
     twin() { "$venv/bin/python" scripts/mitsuba_twin.py "scenes/$name.txt" "$tmp/m.exr" --size 128 --threads 2 --seed 7 --spp "$1" | sed -E 's/.*: ([0-9.]+) s/\1/'; }

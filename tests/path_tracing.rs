@@ -1165,7 +1165,14 @@ fn both_command_lines_take_the_caustic_photons() {
     assert!(!dir.join("bad.exr").exists());
     let o = run(
         glint,
-        &["render", scene, "-o", "bad.exr", "--caustic-photons", "many"],
+        &[
+            "render",
+            scene,
+            "-o",
+            "bad.exr",
+            "--caustic-photons",
+            "many",
+        ],
     );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

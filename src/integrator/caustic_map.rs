@@ -8,10 +8,11 @@
 //! and spheres (each chosen with probability proportional to its power, a
 //! point uniform over its area, a direction cosine-distributed about its
 //! normal), each carrying `Le·π·A / (P(emitter)·count)`. A photon goes on
-//! through delta lobes only (its power times the lobe's weight); it is
-//! stored where it first meets a surface with a non-delta lobe after at
-//! least one delta lobe, and ends there (paths of light that scatter
-//! diffusely before or between delta lobes are the path tracer's). The
+//! through delta lobes only (its power times the lobe's weight; where a
+//! non-delta lobe is chosen it ends); it is stored at every surface with
+//! a non-delta lobe it meets after at least one delta lobe (paths of
+//! light that scatter diffusely before or between delta lobes are the
+//! path tracer's). The
 //! photons' sample dimensions come from one Owen-scrambled Sobol sequence
 //! over the photon indices, they are traced in order-preserving parallel
 //! chunks, and the tree is built from that order: the map, hence the
@@ -23,7 +24,11 @@
 //! [`NORMAL_COS`]), `r` the distance of the farthest of them (at most
 //! `max_radius`): the cone filter of Jensen, which blurs the caustic's
 //! edges less than a box does. The estimate is biased (it blurs over `r`)
-//! and consistent (`r` shrinks as `count` grows).
+//! and consistent (`r` shrinks as `count` grows). Where the non-delta
+//! lobes are all Lambertian, `f` is the same for every photon and the
+//! irradiance `Σ Φₚ·(1 − dₚ/r)·3/(π r²)` is precomputed at every
+//! fourth photon (Christensen 1999): a lookup reads the
+//! nearest of those within its own `r`, from one cell of a grid.
 //!
 //! Delta lobes are symmetric here (no `η²` factor in the dielectric), so
 //! photons use the same BSDF as the paths.

@@ -32,6 +32,12 @@
 //! nothing but the streams: it is the same for any thread count, tile order
 //! or piece split.
 //!
+//! **Caustic map.** With photons in `PathSettings::caustic_map`, the light
+//! of emitting primitives that reaches a non-delta vertex through delta
+//! lobes comes from a caustic photon map ([`super::caustic_map`]), added
+//! at every non-delta vertex, and the paths that find it are not counted
+//! again: consistent, not unbiased (docs/path-tracing.md).
+//!
 //! **Depth.** `max_bounces` counts scattering events: 0 shows the emitters
 //! seen directly, 1 adds direct lighting, each further one a bounce of
 //! indirect light (Mitsuba's `max_depth` is one more). Russian roulette
