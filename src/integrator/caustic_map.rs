@@ -69,6 +69,9 @@ pub struct CausticSettings {
     pub max_radius: f32,
     /// Seed of the photons' sample sequence.
     pub seed: u64,
+    /// The shutter interval: each photon flies at a time uniform over it
+    /// (the map holds the caustics averaged over the exposure).
+    pub shutter: [f32; 2],
 }
 
 impl Default for CausticSettings {
@@ -78,6 +81,7 @@ impl Default for CausticSettings {
             nearest: 64,
             max_radius: 0.02,
             seed: 0,
+            shutter: [0.0, 0.0],
         }
     }
 }
@@ -168,7 +172,7 @@ impl CausticMap {
                         world,
                         sources,
                         &cdf,
-                        &sampler,
+                        (&sampler, settings.shutter),
                         i,
                         n,
                         &material,
@@ -558,7 +562,7 @@ fn trace_photon<M>(
     world: &World,
     sources: &[Source],
     cdf: &[f32],
-    sampler: &Sampler,
+    (sampler, shutter): (&Sampler, [f32; 2]),
     i: u32,
     n: u32,
     material: &M,
@@ -571,6 +575,8 @@ fn trace_photon<M>(
     let uc = stream.next_1d();
     let u_point = stream.next_2d();
     let u_dir = stream.next_2d();
+    let u_time = stream.next_1d();
+    let time = shutter[0] + u_time * (shutter[1] - shutter[0]).max(0.0);
     let k = cdf
         .partition_point(|&c| c <= uc)
         .min(sources.len().saturating_sub(1));
@@ -609,7 +615,7 @@ fn trace_photon<M>(
     let dir = cosine_hemisphere(y.n, u_dir);
     let mut power = src.emission * (PI * area / (src.probability * n as f32));
     let mut spawn = Spawn::leaving(y, src.prim);
-    let mut ray = spawn.spawn_ray(dir);
+    let mut ray = spawn.spawn_ray(dir).at_time(time);
     counters.photon += 1;
     let mut deltas = 0;
     loop {
@@ -650,7 +656,7 @@ fn trace_photon<M>(
         power *= w;
         deltas += 1;
         let mut s = Spawn::leaving(h.surface_point(), h.prim);
-        ray = s.spawn_ray(bs.wi);
+        ray = s.spawn_ray(bs.wi).at_time(time);
         counters.photon += 1;
     }
 }

@@ -6,6 +6,7 @@ use super::report::Report;
 use super::{partial_path, Job, JobError};
 use crate::accel::AccelKind;
 use crate::format::load_scene_files;
+use crate::integrator::caustic_map::CausticSettings;
 use crate::integrator::{
     AmbientOcclusion, AoSettings, Integrator, IntegratorKind, PathSettings, PathTracer, Whitted,
 };
@@ -162,6 +163,10 @@ impl Job {
                     world,
                     PathSettings {
                         texture_space: self.shading.texture_space,
+                        caustic_map: CausticSettings {
+                            shutter: scene.effects.lens.shutter,
+                            ..p.caustic_map
+                        },
                         ..p
                     },
                 );
