@@ -24,6 +24,11 @@ pub const MAX_BOUNCES: u32 = 64;
 /// of a render grows with it, and 4096 is beyond any use in the course.
 pub const MAX_SAMPLES: u32 = 4096;
 
+/// Most photons of the path tracer's caustic map (`--caustic-photons N`):
+/// each stored photon takes 48 bytes, and in a scene of glass every one
+/// may be stored (2^24 photons: at most 0.8 GB).
+pub const MAX_PHOTONS: u32 = 1 << 24;
+
 /// Most noise octaves a texture may ask for. Octave `i` samples at frequency
 /// `2^i`; past about 30 octaves the terms are below `f64` resolution of the
 /// sum, so more only costs time (2e9 octaves used to hang a render).

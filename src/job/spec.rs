@@ -386,6 +386,14 @@ impl Job {
                 limits::int_in(&names.flag(name), n, 1, limits::MAX_SAMPLES)?;
             }
         }
+        if let IntegratorKind::Path(p) = self.integrator {
+            limits::int_in(
+                &names.flag("caustic-photons"),
+                p.caustic_map.photons,
+                0,
+                limits::MAX_PHOTONS,
+            )?;
+        }
         if let AccelKind::Grid { res: Some(r) } = self.build.accel {
             if r.contains(&0) {
                 return Err(format!(
