@@ -390,6 +390,13 @@ fn parse(args: &[String]) -> Result<(Job, bool, bool), String> {
             p.caustic_map.photons = number("-caustic_photons", n)?;
         }
     }
+    if !matches!(job.integrator, IntegratorKind::Path(_))
+        && args.iter().any(|a| a == "-caustic_photons")
+    {
+        return Err(
+            "-caustic_photons: the caustic map is the path tracer's; add -integrator path".into(),
+        );
+    }
     job.input = input.ok_or("missing -input SCENE")?;
     job.validate(FlagNames::Course).map_err(|e| e.to_string())?;
     Ok((job, stats, quiet))

@@ -128,9 +128,17 @@ fn job(a: &RenderArgs) -> Result<Job, JobError> {
     if let Some(d) = path_depth {
         job.shading.bounces = d;
     }
-    if let IntegratorKind::Path(p) = &mut job.integrator {
-        p.max_bounces = job.shading.bounces;
-        p.caustic_map.photons = a.caustic_photons;
+    match &mut job.integrator {
+        IntegratorKind::Path(p) => {
+            p.max_bounces = job.shading.bounces;
+            p.caustic_map.photons = a.caustic_photons;
+        }
+        _ if a.caustic_photons > 0 => {
+            return Err(app::usage(
+                "--caustic-photons: the caustic map is the path tracer's; add --integrator path",
+            ))
+        }
+        _ => {}
     }
     if a.srgb {
         job.encoding = glint::output::Encoding::Srgb;
