@@ -187,7 +187,7 @@ const FLAGS: &[(&str, &str, &str)] = &[
     (
         "-caustic_photons",
         "N",
-        "with -integrator path: N photons from the emitting primitives into a caustic photon map, which carries the light they send through mirrors and glass onto other surfaces (biased: blurred over a few photons' distance; 0 to 16777216, default 0: paths carry every caustic)",
+        "with -integrator path: N photons from the emitting primitives and area lights into a caustic photon map, which carries the light they send through mirrors and glass onto other surfaces (biased: blurred over a few photons' distance; 0 to 16777216, default 0: paths carry every caustic)",
     ),
     ("-help", "", "print this help (also -h, --help)"),
 ];

@@ -5,9 +5,10 @@
 //! the delta lobes.
 //!
 //! **The photons.** `count` photons leave the world's emitting triangles
-//! and spheres (each chosen with probability proportional to its power, a
-//! point uniform over its area, a direction cosine-distributed about its
-//! normal), each carrying `Le·π·A / (P(emitter)·count)`. A photon goes on
+//! and spheres and its `AreaLight`s (each chosen with probability
+//! proportional to its power, a point uniform over its emitting area, a
+//! face of a flat light at random, a direction cosine-distributed about
+//! the normal), each carrying `Le·π·A / (P(emitter)·count)`. A photon goes on
 //! through delta lobes only (its power times the lobe's weight; where a
 //! non-delta lobe is chosen it ends); it is stored at every surface with
 //! a non-delta lobe it meets after at least one delta lobe (paths of
@@ -34,9 +35,10 @@
 //! photons use the same BSDF as the paths.
 
 use crate::bsdf::{Bsdf, Lobe};
-use crate::math::warp::{cosine_hemisphere, uniform_triangle};
+use crate::math::warp::{concentric_disk, cosine_hemisphere, uniform_triangle};
 use crate::math::{Spawn, SurfacePoint, Vec3};
 use crate::sampler::{Sampler, SamplerKind};
+use crate::scene::{AreaShape, RenderAreaShape};
 use crate::shape::Shape;
 use crate::stats::Counters;
 use crate::world::World;
@@ -100,16 +102,25 @@ pub struct Photon {
     pub n: Vec3,
 }
 
-/// An emitter photons leave: a triangle or a sphere primitive, its
-/// emission and the probability of choosing it.
+/// An emitter photons leave, its radiance and the probability of choosing
+/// it.
 #[derive(Clone, Copy, Debug)]
 pub struct Source {
-    /// The primitive's index in the world.
-    pub prim: u32,
-    /// Radiance it emits (front side).
+    /// What emits.
+    pub from: Emits,
+    /// Radiance it emits (front side; both faces of a flat area light).
     pub emission: Vec3,
     /// Probability of choosing it (the sources' sum to 1).
     pub probability: f32,
+}
+
+/// What a [`Source`] is.
+#[derive(Clone, Copy, Debug)]
+pub enum Emits {
+    /// An emitting triangle or sphere: its index in the world.
+    Prim(u32),
+    /// An `AreaLight`'s surface (not in the aggregate: it blocks no ray).
+    Area(RenderAreaShape),
 }
 
 /// The photons, in a balanced kd-tree over their positions.
@@ -586,35 +597,79 @@ fn trace_photon<M>(
     if src.probability <= 0.0 {
         return;
     }
-    let prim = &world.prims()[src.prim as usize];
-    let (y, area): (SurfacePoint, f32) = match &prim.shape {
-        Shape::Triangle(t) => {
-            let [a, b, c] = t.v;
-            (
-                t.surface_at(uniform_triangle(u_point)),
-                0.5 * (b - a).cross(c - a).length(),
-            )
-        }
-        Shape::Sphere(s) => {
-            let z = 1.0 - 2.0 * u_point.x;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = 2.0 * PI * u_point.y;
-            let nrm = Vec3::new(r * phi.cos(), r * phi.sin(), z);
-            let error = crate::math::gamma(5) * (s.center.abs() + (nrm * s.radius).abs());
-            (
-                SurfacePoint {
-                    p: s.center + nrm * s.radius,
-                    error,
-                    n: nrm,
-                },
-                4.0 * PI * s.radius * s.radius,
-            )
-        }
-        _ => return,
+    let sphere = |center: Vec3, radius: f32| {
+        let z = 1.0 - 2.0 * u_point.x;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = 2.0 * PI * u_point.y;
+        let nrm = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let error = crate::math::gamma(5) * (center.abs() + (nrm * radius).abs());
+        let y = SurfacePoint {
+            p: center + nrm * radius,
+            error,
+            n: nrm,
+        };
+        (y, 4.0 * PI * radius * radius)
     };
+    // A flat light emits from both faces: one chosen by the next value.
+    let face = |n: Vec3, u: f32| if u < 0.5 { n } else { -n };
+    let flat = |p: Vec3, n: Vec3, area: f32, u: f32| {
+        let error = crate::math::gamma(5) * p.abs();
+        (
+            SurfacePoint {
+                p,
+                error,
+                n: face(n, u),
+            },
+            2.0 * area,
+        )
+    };
+    let u_face = stream.next_1d();
+    let ((y, area), prim): ((SurfacePoint, f32), Option<u32>) = match src.from {
+        Emits::Prim(prim) => match &world.prims()[prim as usize].shape {
+            Shape::Triangle(t) => {
+                let [a, b, c] = t.v;
+                (
+                    (
+                        t.surface_at(uniform_triangle(u_point)),
+                        0.5 * (b - a).cross(c - a).length(),
+                    ),
+                    Some(prim),
+                )
+            }
+            Shape::Sphere(s) => (sphere(s.center, s.radius), Some(prim)),
+            _ => return,
+        },
+        Emits::Area(AreaShape::Quad {
+            corner,
+            edge1,
+            edge2,
+        }) => {
+            let n = edge1.cross(edge2);
+            let p = corner + edge1 * u_point.x + edge2 * u_point.y;
+            (flat(p, n.normalize_or_zero(), n.length(), u_face), None)
+        }
+        Emits::Area(AreaShape::Disk {
+            center,
+            normal,
+            radius,
+        }) => {
+            let n = normal.normalize_or_zero();
+            let (t1, t2) = n.any_orthonormal_pair();
+            let d = concentric_disk(u_point) * radius;
+            let p = center + t1 * d.x + t2 * d.y;
+            (flat(p, n, PI * radius * radius, u_face), None)
+        }
+        Emits::Area(AreaShape::Sphere { center, radius }) => (sphere(center, radius), None),
+    };
+    if y.n == Vec3::ZERO || area.is_nan() || area <= 0.0 {
+        return;
+    }
     let dir = cosine_hemisphere(y.n, u_dir);
     let mut power = src.emission * (PI * area / (src.probability * n as f32));
-    let mut spawn = Spawn::leaving(y, src.prim);
+    let mut spawn = match prim {
+        Some(prim) => Spawn::leaving(y, prim),
+        None => Spawn::new(y),
+    };
     let mut ray = spawn.spawn_ray(dir).at_time(time);
     counters.photon += 1;
     let mut deltas = 0;

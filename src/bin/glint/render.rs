@@ -45,7 +45,7 @@ pub struct RenderArgs {
     /// What to compute: whitted (the shaded image), ao (the grey ambient-occlusion image) or path (path tracing with light sampling and MIS; see docs/path-tracing.md).
     #[arg(long, default_value = "whitted", value_parser = PossibleValuesParser::new(IntegratorKind::NAMES).try_map(|s| s.parse::<IntegratorKind>()))]
     integrator: IntegratorKind,
-    /// With --integrator path: shoot N photons from the emitting primitives into a caustic photon map, which then carries the light they send through mirrors and glass onto other surfaces (biased: it blurs over a few photons' distance; see docs/path-tracing.md). 0 (the default, up to 16777216): no map, paths carry every caustic.
+    /// With --integrator path: shoot N photons from the emitting primitives and area lights into a caustic photon map, which then carries the light they send through mirrors and glass onto other surfaces (biased: it blurs over a few photons' distance; see docs/path-tracing.md). 0 (the default, up to 16777216): no map, paths carry every caustic.
     #[arg(long, default_value_t = 0, value_name = "N")]
     caustic_photons: u32,
     /// Encode 8-bit outputs (.png .tga .ppm .bmp) with the sRGB curve, rounded, and mark PNGs sRGB, as image viewers assume. The default stores the linear values truncated to bytes, the course's convention: raytracer's reference images, glint's thumbnails and image hashes compare byte for byte across both commands. .exr/.pfm stay linear.
