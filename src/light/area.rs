@@ -89,6 +89,21 @@ pub enum Prepared {
 }
 
 impl Prepared {
+    /// Whether every direction from the point to the light keeps the sign
+    /// of each component and spreads it by at most `spread` of its
+    /// smallest magnitude: a sphere whose centre lies at least `r (1 + 2 /
+    /// spread)` away along every axis (rays to it may share a packet's
+    /// walk, `bvh8`'s spread limit). Quads and disks answer no.
+    #[inline]
+    pub fn narrow(&self, spread: f32) -> bool {
+        match self {
+            Prepared::Sphere { cone, .. } => (cone.to_c.abs() * spread)
+                .cmpge(Vec3::splat(cone.r * (spread + 2.0)))
+                .all(),
+            _ => false,
+        }
+    }
+
     /// What samples of `shape` (of `radiance`) seen from `p` share.
     // Always inlined (and `sample`, and the cone's): out of line, the
     // prepared light came back through memory, a store-forwarding stall.

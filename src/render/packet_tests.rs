@@ -388,6 +388,24 @@ const SHADOW_SCENES: [&str; 4] = [
     "dof_row.txt",
 ];
 
+/// `scene` with its sphere lights six times as far and a fifth as large:
+/// from every point their rays are narrow enough for packets
+/// (`Prepared::narrow`), which the scenes' own near lights seldom are.
+fn far_lights(mut scene: Scene) -> Scene {
+    use crate::scene::{AreaShape, Light};
+    for l in &mut scene.lights {
+        if let Light::Area {
+            shape: AreaShape::Sphere { center, radius },
+            ..
+        } = l
+        {
+            *center *= 6.0;
+            *radius *= 0.2;
+        }
+    }
+    scene
+}
+
 /// An integrator that traces every ray alone (`Trace::packets` off):
 /// what the render loop's integrators do without shadow packets.
 struct Alone<I>(I);
@@ -425,8 +443,16 @@ impl<I: Integrator> Integrator for Alone<I> {
 #[test]
 fn shadow_packet_renders_are_single_ray_renders() {
     let mut fewer = false;
-    for name in SHADOW_SCENES {
-        let scene = own(name);
+    for (name, far) in SHADOW_SCENES
+        .iter()
+        .map(|n| (*n, false))
+        .chain([("sphere_lights_knot.txt", true)])
+    {
+        let scene = if far {
+            far_lights(own(name))
+        } else {
+            own(name)
+        };
         let (world, camera) = world_of(&scene, AccelKind::Bvh8, true);
         for (shadow_samples, transparent_shadows) in [(8, false), (12, false), (8, true)] {
             let whitted = Whitted {
@@ -441,7 +467,7 @@ fn shadow_packet_renders_are_single_ray_renders() {
             for (s, region) in settings((64, 24)).into_iter().take(3) {
                 let packed = render_with(&world, &camera, &whitted, (&s, region), 1);
                 let alone = render_with(&world, &camera, &Alone(whitted), (&s, region), 1);
-                let what = format!("{name} {shadow_samples} {transparent_shadows} {s:?}");
+                let what = format!("{name} {far} {shadow_samples} {transparent_shadows} {s:?}");
                 assert!(planes(&packed.frame) == planes(&alone.frame), "{what}");
                 assert!(packed.samples == alone.samples, "{what}");
                 let rays = |c: &Counters| Counters {
@@ -481,7 +507,7 @@ fn shadow_packet_renders_are_single_ray_renders() {
 #[test]
 fn shadow_packets_show_the_observer_every_ray_in_order() {
     use crate::integrator::{Branch, RayRecorder, Trace};
-    let scene = own("sphere_lights_knot.txt");
+    let scene = far_lights(own("sphere_lights_knot.txt"));
     let (world, camera) = world_of(&scene, AccelKind::Bvh8, true);
     let whitted = Whitted {
         shadows: true,
@@ -490,7 +516,7 @@ fn shadow_packets_show_the_observer_every_ray_in_order() {
     };
     let sampler = Sampler::new(SamplerKind::Sobol, 1, 3);
     let (w, h) = (40u32, 30u32);
-    let mut shadow_rays = 0;
+    let (mut shadow_rays, mut fewer) = (0, false);
     for j in 0..h {
         for i in 0..w {
             let trace = |packets: bool| {
@@ -509,12 +535,21 @@ fn shadow_packets_show_the_observer_every_ray_in_order() {
                 let (c, _) = whitted.trace_sampled(cx, &ray, camera.tmin(), Branch::CAMERA);
                 // (Debug text: a blocked shadow ray's `t_end` is NaN.)
                 let rays = format!("{:?}", rec.rays);
-                (c.to_array().map(f32::to_bits), rays, rec.rays.len())
+                let nodes = counters.nodes_visited;
+                (
+                    (c.to_array().map(f32::to_bits), rays, rec.rays.len()),
+                    nodes,
+                )
             };
-            let (packed, alone) = (trace(true), trace(false));
+            let ((packed, n_packed), (alone, n_alone)) = (trace(true), trace(false));
             assert_eq!(packed, alone, "pixel ({i}, {j})");
+            assert!(n_packed <= n_alone, "pixel ({i}, {j})");
+            fewer |= n_packed < n_alone;
             shadow_rays += alone.2.saturating_sub(1);
         }
     }
-    assert!(shadow_rays > 0);
+    assert!(
+        shadow_rays > 0 && fewer,
+        "{shadow_rays} shadow rays, packets {fewer}"
+    );
 }
