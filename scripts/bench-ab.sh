@@ -17,11 +17,11 @@
 #   (the faceted gem, 5 bounces), as scripts/bench-vs-mitsuba.sh renders them; skipped, with a line,
 #   without the course data ($GLINT_SHARED or ../shared).
 # With AREA=1, also area lights (the Whitted tree's shadow rays from one point towards one light,
-# traced in packets of 8 where a point takes at least 8 for a light), at 256x192:
-# - scenes/sphere_lights_knot.txt with its own 4 shadow rays per light (no packets), and with 8
-#   (--shadow-samples 8: packets, most of them too spread for the packet walk: the lights are near);
-# - the same knot under two small far lights (its lights' spheres replaced by sed; every packet
-#   walked together), 8 shadow rays per light;
+# traced in packets of 8 where a point takes at least 8 for a narrow sphere light), at 256x192:
+# - scenes/sphere_lights_knot.txt with its own 4 shadow rays per light, and with 8
+#   (--shadow-samples 8; its lights are near: few packets);
+# - the same knot under two small far lights (its lights' spheres replaced by sed; packets walked
+#   together), 8 shadow rays per light;
 # - scenes/area_soft_shadows.txt (16 shadow rays per light: spheres and planes, a tree of one node).
 # The machine may be shared: report `uptime` with the table.
 set -euo pipefail
