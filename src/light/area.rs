@@ -378,6 +378,39 @@ mod tests {
     use super::*;
     use crate::math::testing::{check_error_box, Lcg};
 
+    /// A sphere is narrow where its centre lies at least `r (1 + 2 / s)`
+    /// away along every axis: then every sampled direction keeps the signs
+    /// and spreads by at most `s`; quads are never narrow.
+    #[test]
+    fn narrow_spheres_keep_their_directions_close() {
+        let s = 0.125;
+        let sphere = |center, radius| AreaShape::Sphere { center, radius };
+        let p = Vec3::ZERO;
+        let narrow = |c: Vec3, r| Prepared::new(&sphere(c, r), Vec3::ONE, p).narrow(s);
+        assert!(narrow(Vec3::new(20.0, -30.0, 17.5), 1.0));
+        assert!(!narrow(Vec3::new(20.0, -30.0, 16.5), 1.0));
+        assert!(!narrow(Vec3::new(0.0, 100.0, 100.0), 0.1));
+        assert!(!narrow(Vec3::new(9.0, 7.0, 6.0), 1.2));
+        let c = Vec3::new(30.0, -40.0, 25.0);
+        let prepared = Prepared::new(&sphere(c, 1.0), Vec3::ONE, p);
+        assert!(prepared.narrow(s));
+        let mut rng = Lcg(3);
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::ZERO);
+        for _ in 0..2000 {
+            let inc = prepared.sample(Vec2::new(rng.next(), rng.next()));
+            let d = inc.at.unwrap().p - p;
+            assert_eq!(d.is_negative_bitmask(), c.is_negative_bitmask());
+            (lo, hi) = (lo.min(d.abs()), hi.max(d.abs()));
+        }
+        assert!((hi - lo).cmple(lo * s).all(), "{lo} {hi}");
+        let quad = AreaShape::Quad {
+            corner: c,
+            edge1: Vec3::X * 0.01,
+            edge2: Vec3::Z * 0.01,
+        };
+        assert!(!Prepared::new(&quad, Vec3::ONE, p).narrow(s));
+    }
+
     /// Mean of the estimator over a fine grid of samples.
     fn irradiance(shape: &RenderAreaShape, p: Vec3, n: Vec3) -> f32 {
         let k = 200;
