@@ -244,6 +244,7 @@ fn trace_a_few(scene: &Scene) {
                         stream: &mut stream,
                         counters: &mut c,
                         observer: &mut NoObserver,
+                        packets: world.walks_packets(),
                     };
                     let (_color, hit) = integrator.li(cx, &ray, camera.tmin());
                     if let Some(h) = hit.filter(|_| ray.origin.is_finite() && ray.dir.is_finite()) {

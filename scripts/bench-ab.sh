@@ -16,6 +16,13 @@
 # - the course's scene6_07 (40k-triangle bunny, two lights, shadows) at 400x400 and scene4_14
 #   (the faceted gem, 5 bounces), as scripts/bench-vs-mitsuba.sh renders them; skipped, with a line,
 #   without the course data ($GLINT_SHARED or ../shared).
+# With AREA=1, also area lights (the Whitted tree's shadow rays from one point towards one light,
+# traced in packets of 8 where a point takes at least 8 for a narrow sphere light), at 256x192:
+# - scenes/sphere_lights_knot.txt with its own 4 shadow rays per light, and with 8
+#   (--shadow-samples 8; its lights are near: few packets);
+# - the same knot under two small far lights (its lights' spheres replaced by sed; packets walked
+#   together), 8 shadow rays per light;
+# - scenes/area_soft_shadows.txt (16 shadow rays per light: spheres and planes, a tree of one node).
 # The machine may be shared: report `uptime` with the table.
 set -euo pipefail
 export LC_ALL=C
@@ -29,6 +36,9 @@ new=$(scripts/image-hashes.sh --build "$new_rev")
 shared=${GLINT_SHARED:-}
 [ -n "$shared" ] || { [ -d ../shared/scenes ] && shared=../shared; } || true
 
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
 names=()
 args=()
 add() { names+=("$1"); shift; args+=("$*"); }
@@ -39,9 +49,18 @@ if [ -n "$shared" ] && [ -d "$shared/scenes/6837" ]; then
 else
   echo "bench-ab: no course data (set GLINT_SHARED): only scenes/whitted.txt" >&2
 fi
+if [ -n "${AREA:-}" ]; then
+  knot="scenes/sphere_lights_knot.txt --size 256 192 --shadows"
+  add knot_lights "$knot"
+  add knot_lights_s8 "$knot --shadow-samples 8"
+  sed -e 's/center -4.5 7 2 radius 1.2/center -30 40 25 radius 0.3/' \
+    -e 's/center 5.5 3.5 -1 radius 0.35/center 35 25 -10 radius 0.1/' \
+    -e "s#meshes/knot_16k.obj#$PWD/scenes/meshes/knot_16k.obj#" \
+    scenes/sphere_lights_knot.txt >"$tmp/knot_small_lights.txt"
+  add knot_small_lights_s8 "$tmp/knot_small_lights.txt --size 256 192 --shadows --shadow-samples 8"
+  add area_soft_shadows "scenes/area_soft_shadows.txt --size 256 192 --shadows"
+fi
 
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
 # Prints the render time in ms of binary folder $1 on case $2 at $3 spp.
 time_of() {
   local -a a

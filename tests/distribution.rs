@@ -200,6 +200,7 @@ fn rectangle_light_past_an_occluder_edge() {
                 stream: &mut st,
                 counters: &mut c,
                 observer: &mut NoObserver,
+                packets: false,
             },
             &ray,
             0.0,
@@ -240,6 +241,7 @@ fn ao_along(world: &World, ray: Ray, samples: u32, distance: f32) -> (f32, Count
         stream: &mut st,
         counters: &mut counters,
         observer: &mut NoObserver,
+        packets: false,
     };
     let (c, hit) = ao.li(cx, &ray, 0.0);
     assert!(hit.is_some());
@@ -347,6 +349,7 @@ fn whitted_scales_only_its_ambient_term_by_ambient_occlusion() {
                 stream: &mut st,
                 counters: &mut Counters::default(),
                 observer: &mut NoObserver,
+                packets: false,
             },
             &ray,
             0.0,
@@ -1028,6 +1031,7 @@ fn split_rays_converge_too() {
                     stream: &mut st,
                     counters: &mut Counters::default(),
                     observer: &mut NoObserver,
+                    packets: false,
                 };
                 w.li(cx, &Ray::new(o, Vec3::NEG_Y), 0.0).0
             })

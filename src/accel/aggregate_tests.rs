@@ -90,6 +90,73 @@ fn every_aggregate_keeps_the_trait_s_promises() {
     }
 }
 
+/// `occluded_packet` answers each ray of a packet as `occluded_except`
+/// does alone (skip ids: none, a primitive, `u32::MAX`), for packets of
+/// 1 to 8 random rays and of up to 8 rays from one point towards a small
+/// patch (which bvh8 walks together); with the same statistics where the
+/// aggregate asks ray by ray, and fewer nodes visited on bvh8.
+#[test]
+fn every_aggregate_answers_packets_as_single_rays() {
+    use super::PacketRay;
+    let prims = soup(7, 400);
+    for (name, a) in every_aggregate(&prims) {
+        let mut r = Rng::new(11);
+        let (mut packed, mut alone) = (Counters::default(), Counters::default());
+        for k in 0..300 {
+            let n = 1 + k % 8;
+            let rays: Vec<PacketRay> = if k % 2 == 0 {
+                (0..n)
+                    .map(|_| PacketRay {
+                        ray: ray(&mut r),
+                        tmin: 0.0,
+                        tmax: f32::INFINITY,
+                    })
+                    .collect()
+            } else {
+                let o = ray(&mut r).origin;
+                let to = Vec3::new(r.f(), r.f(), r.f()) * 4.0 - 2.0;
+                (0..n)
+                    .map(|_| PacketRay {
+                        ray: Ray::new(o, to + Vec3::new(r.f(), r.f(), r.f()) * 0.01 - o),
+                        tmin: 0.0,
+                        tmax: 1.0,
+                    })
+                    .collect()
+            };
+            let skip: Vec<u32> = (0..n)
+                .map(|i| match (k + i) % 3 {
+                    0 => u32::MAX,
+                    _ => r.below(prims.len()) as u32,
+                })
+                .collect();
+            for except in [&[][..], &skip[..]] {
+                let (mut cp, mut c1) = (Counters::default(), Counters::default());
+                let got = a.occluded_packet(&prims, &rays, except, &mut cp);
+                for (i, q) in rays.iter().enumerate() {
+                    let query = Query::new(&prims, &q.ray, q.tmin, q.tmax);
+                    let want = match except.get(i) {
+                        Some(&e) => a.occluded_except(query, e, &mut c1),
+                        None => a.occluded(query, &mut c1),
+                    };
+                    assert_eq!(got >> i & 1 != 0, want, "{name} {k} {i}");
+                }
+                assert_eq!(got >> n, 0, "{name}");
+                if name != "bvh8" {
+                    assert_eq!(cp, c1, "{name}");
+                }
+                packed.nodes_visited += cp.nodes_visited;
+                alone.nodes_visited += c1.nodes_visited;
+            }
+        }
+        if name == "bvh8" {
+            assert!(
+                packed.nodes_visited < alone.nodes_visited,
+                "{packed:?} {alone:?}"
+            );
+        }
+    }
+}
+
 /// Brute force tests every primitive for a closest hit, and primitives in
 /// order up to the first that blocks a shadow ray (all of them on a miss).
 #[test]

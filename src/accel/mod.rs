@@ -167,6 +167,32 @@ pub trait Aggregate: Send + Sync {
         self.occluded(q, counters)
     }
 
+    /// [`occluded_except`](Self::occluded_except) of each ray of a packet
+    /// (at most [`PACKET`]) against `prims`: bit `r` set when something
+    /// blocks ray `r`, each ray's answer alone. `except` is empty or holds
+    /// one primitive per ray that cannot block it ([`u32::MAX`] for none:
+    /// [`occluded`](Self::occluded)). The default asks ray by ray, with the
+    /// same statistics; the wide BVH walks the packet together
+    /// (`Bvh8::any_packet`, counting each node once for the packet).
+    fn occluded_packet(
+        &self,
+        prims: &[Primitive],
+        rays: &[PacketRay],
+        except: &[u32],
+        counters: &mut Counters,
+    ) -> u32 {
+        let mut blocked = 0;
+        for (r, q) in rays.iter().enumerate() {
+            let q = Query::new(prims, &q.ray, q.tmin, q.tmax);
+            let b = match except.get(r) {
+                Some(&i) if i != u32::MAX => self.occluded_except(q, i, counters),
+                _ => self.occluded(q, counters),
+            };
+            blocked |= u32::from(b) << r;
+        }
+        blocked
+    }
+
     /// Bounds of everything inside.
     fn bounds(&self) -> Aabb;
 

@@ -17,6 +17,7 @@ pub use observer::{Branch, NoObserver, RayKind, RayObserver, RayRecorder, Record
 pub use path::{CausticPaths, LightChoice, PathSettings, PathTracer, Strategy};
 pub use whitted::Whitted;
 
+use crate::accel::PacketRay;
 use crate::math::{Ray, Vec3};
 use crate::sampler::SampleStream;
 use crate::stats::Counters;
@@ -48,6 +49,12 @@ pub struct Trace<'a, 's, O> {
     pub counters: &'a mut Counters,
     /// Told every ray traced.
     pub observer: &'a mut O,
+    /// Whether the integrator traces coherent rays together where it has
+    /// them (shadow rays from one point towards one area light:
+    /// [`blocked_packet`](Self::blocked_packet)), the same answers as ray
+    /// by ray. The render loop sets it where the world walks packets
+    /// (`World::walks_packets`).
+    pub packets: bool,
 }
 
 impl<O: RayObserver> Trace<'_, '_, O> {
@@ -83,6 +90,21 @@ impl<O: RayObserver> Trace<'_, '_, O> {
         count_ray(self.counters, RayKind::Shadow);
         let blocked = (self.world).occluded_leaving(ray, 0.0, tmax, leaving, self.counters);
         self.observer.shadow(ray, tmax, blocked, depth);
+        blocked
+    }
+
+    /// [`blocked`](Self::blocked) for each ray of a packet of shadow rays
+    /// (at most `PACKET`, each to its own `tmin = 0` and `tmax`), all
+    /// leaving primitive `leaving` (`World::occluded_packet`): bit `r` set
+    /// when ray `r` is blocked. Counted and shown to the observer ray
+    /// after ray, in order, as [`blocked`](Self::blocked) does.
+    #[inline]
+    pub fn blocked_packet(&mut self, rays: &[PacketRay], leaving: Option<u32>, depth: u32) -> u32 {
+        let blocked = (self.world).occluded_packet(rays, leaving, self.counters);
+        for (r, q) in rays.iter().enumerate() {
+            count_ray(self.counters, RayKind::Shadow);
+            (self.observer).shadow(&q.ray, q.tmax, blocked >> r & 1 != 0, depth);
+        }
         blocked
     }
 }

@@ -89,6 +89,21 @@ pub enum Prepared {
 }
 
 impl Prepared {
+    /// Whether every direction from the point to the light keeps the sign
+    /// of each component and spreads it by at most `spread` of its
+    /// smallest magnitude: a sphere whose centre lies at least `r (1 + 2 /
+    /// spread)` away along every axis (rays to it may share a packet's
+    /// walk, `bvh8`'s spread limit). Quads and disks answer no.
+    #[inline]
+    pub fn narrow(&self, spread: f32) -> bool {
+        match self {
+            Prepared::Sphere { cone, .. } => (cone.to_c.abs() * spread)
+                .cmpge(Vec3::splat(cone.r * (spread + 2.0)))
+                .all(),
+            _ => false,
+        }
+    }
+
     /// What samples of `shape` (of `radiance`) seen from `p` share.
     // Always inlined (and `sample`, and the cone's): out of line, the
     // prepared light came back through memory, a store-forwarding stall.
@@ -362,6 +377,39 @@ impl Cone {
 mod tests {
     use super::*;
     use crate::math::testing::{check_error_box, Lcg};
+
+    /// A sphere is narrow where its centre lies at least `r (1 + 2 / s)`
+    /// away along every axis: then every sampled direction keeps the signs
+    /// and spreads by at most `s`; quads are never narrow.
+    #[test]
+    fn narrow_spheres_keep_their_directions_close() {
+        let s = 0.125;
+        let sphere = |center, radius| AreaShape::Sphere { center, radius };
+        let p = Vec3::ZERO;
+        let narrow = |c: Vec3, r| Prepared::new(&sphere(c, r), Vec3::ONE, p).narrow(s);
+        assert!(narrow(Vec3::new(20.0, -30.0, 17.5), 1.0));
+        assert!(!narrow(Vec3::new(20.0, -30.0, 16.5), 1.0));
+        assert!(!narrow(Vec3::new(0.0, 100.0, 100.0), 0.1));
+        assert!(!narrow(Vec3::new(9.0, 7.0, 6.0), 1.2));
+        let c = Vec3::new(30.0, -40.0, 25.0);
+        let prepared = Prepared::new(&sphere(c, 1.0), Vec3::ONE, p);
+        assert!(prepared.narrow(s));
+        let mut rng = Lcg(3);
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::ZERO);
+        for _ in 0..2000 {
+            let inc = prepared.sample(Vec2::new(rng.next(), rng.next()));
+            let d = inc.at.unwrap().p - p;
+            assert_eq!(d.is_negative_bitmask(), c.is_negative_bitmask());
+            (lo, hi) = (lo.min(d.abs()), hi.max(d.abs()));
+        }
+        assert!((hi - lo).cmple(lo * s).all(), "{lo} {hi}");
+        let quad = AreaShape::Quad {
+            corner: c,
+            edge1: Vec3::X * 0.01,
+            edge2: Vec3::Z * 0.01,
+        };
+        assert!(!Prepared::new(&quad, Vec3::ONE, p).narrow(s));
+    }
 
     /// Mean of the estimator over a fine grid of samples.
     fn irradiance(shape: &RenderAreaShape, p: Vec3, n: Vec3) -> f32 {

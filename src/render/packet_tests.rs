@@ -286,3 +286,270 @@ fn ao_and_path_packet_renders_are_single_ray_renders() {
         packets_render_as_single_rays(name, |w| PathTracer::new(w, settings));
     }
 }
+
+/// Shadow packets: each hit of a scene with area lights sends 8 (and 12:
+/// a full packet and a part) shadow rays to one light; every ray's
+/// `World::occluded_packet` answer is its `occluded_leaving` answer alone,
+/// on every accelerator, with and without flattening; the statistics are
+/// the single rays' ray by ray elsewhere, and fewer nodes on bvh8 where
+/// its packet walk takes them.
+#[test]
+fn shadow_packet_answers_are_single_ray_answers() {
+    use crate::light::{is_delta, prepare_area};
+    use crate::math::{Spawn, SHADOW_EPSILON};
+    let (w, h) = (96u32, 72u32);
+    let sampler = Sampler::new(SamplerKind::Sobol, 1, 7);
+    let (mut blocked, mut clear) = (0, 0);
+    for name in SHADOW_SCENES {
+        let scene = own(name);
+        for accel in [
+            AccelKind::Bvh8,
+            AccelKind::Bvh(Split::Sah),
+            AccelKind::Grid { res: None },
+            AccelKind::None,
+        ] {
+            for flatten in [true, false] {
+                let (world, camera) = world_of(&scene, accel, flatten);
+                let (mut alone, mut packed) = (Counters::default(), Counters::default());
+                for j in (0..h).step_by(3) {
+                    for i in (0..w).step_by(3) {
+                        let mut s = sampler.stream((i, j), 0);
+                        let o = s.next_2d();
+                        let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut s);
+                        let mut c = Counters::default();
+                        let Some(hit) = world.intersect(&ray, camera.tmin(), f32::INFINITY, &mut c)
+                        else {
+                            continue;
+                        };
+                        let from = &mut Spawn::leaving(hit.surface_point(), hit.prim);
+                        for light in world.lights().iter().filter(|l| !is_delta(l)) {
+                            let Some(prepared) = prepare_area(light, from.from.p) else {
+                                continue;
+                            };
+                            for k in [8, 12] {
+                                let rays: Vec<PacketRay> = (s.split_2d(k))
+                                    .filter_map(|u| prepared.sample(u).at)
+                                    .map(|at| PacketRay {
+                                        ray: from.spawn_ray_to_surface(&at).at_time(ray.time),
+                                        tmin: 0.0,
+                                        tmax: 1.0 - SHADOW_EPSILON,
+                                    })
+                                    .collect();
+                                for rays in rays.chunks(PACKET) {
+                                    let got =
+                                        world.occluded_packet(rays, from.leaving, &mut packed);
+                                    for (r, q) in rays.iter().enumerate() {
+                                        let want = world.occluded_leaving(
+                                            &q.ray,
+                                            q.tmin,
+                                            q.tmax,
+                                            from.leaving,
+                                            &mut alone,
+                                        );
+                                        assert_eq!(
+                                            got >> r & 1 != 0,
+                                            want,
+                                            "{name} {accel} flatten {flatten}: {q:?}"
+                                        );
+                                        if want {
+                                            blocked += 1;
+                                        } else {
+                                            clear += 1;
+                                        }
+                                    }
+                                    assert_eq!(got >> rays.len(), 0, "{name} {accel}");
+                                }
+                            }
+                        }
+                    }
+                }
+                if accel == AccelKind::Bvh8 {
+                    assert!(
+                        packed.nodes_visited < alone.nodes_visited,
+                        "{name} flatten {flatten}: {packed:?} vs {alone:?}"
+                    );
+                } else {
+                    assert_eq!(packed, alone, "{name} {accel}");
+                }
+            }
+        }
+    }
+    assert!(blocked > 0 && clear > 0, "{blocked} blocked, {clear} clear");
+}
+
+/// Scenes with area lights for the shadow packets: spheres on planes
+/// (the plane a ray leaves skipped), moving shapes (each ray at its own
+/// time), the 16k-triangle knot on a floor of two triangles (the triangle
+/// a ray leaves skipped) under two sphere lights, and a thin lens.
+const SHADOW_SCENES: [&str; 4] = [
+    "area_soft_shadows.txt",
+    "motion_spinning.txt",
+    "sphere_lights_knot.txt",
+    "dof_row.txt",
+];
+
+/// `scene` with its sphere lights six times as far and a fifth as large:
+/// from every point their rays are narrow enough for packets
+/// (`Prepared::narrow`), which the scenes' own near lights seldom are.
+fn far_lights(mut scene: Scene) -> Scene {
+    use crate::scene::{AreaShape, Light};
+    for l in &mut scene.lights {
+        if let Light::Area {
+            shape: AreaShape::Sphere { center, radius },
+            ..
+        } = l
+        {
+            *center *= 6.0;
+            *radius *= 0.2;
+        }
+    }
+    scene
+}
+
+/// An integrator that traces every ray alone (`Trace::packets` off):
+/// what the render loop's integrators do without shadow packets.
+struct Alone<I>(I);
+
+impl<I: Integrator> Integrator for Alone<I> {
+    fn li<O: crate::integrator::RayObserver>(
+        &self,
+        cx: &mut crate::integrator::Trace<O>,
+        ray: &crate::math::Ray,
+        tmin: f32,
+    ) -> (Vec3, Option<Hit>) {
+        cx.packets = false;
+        self.0.li(cx, ray, tmin)
+    }
+
+    fn li_hit<O: crate::integrator::RayObserver>(
+        &self,
+        cx: &mut crate::integrator::Trace<O>,
+        ray: &crate::math::Ray,
+        tmin: f32,
+        hit: Option<&Hit>,
+    ) -> Vec3 {
+        cx.packets = false;
+        self.0.li_hit(cx, ray, tmin, hit)
+    }
+}
+
+/// Whitted renders with 8 and 12 shadow rays per area light, their
+/// shadow rays in packets (bvh8) against the same renders with each
+/// shadow ray alone: the same planes and kept samples bit for bit, the
+/// same rays of every kind, no more nodes visited (fewer in some); on 1
+/// and 2 threads
+/// (counters too); with transparent shadows (which take no packets) the
+/// same counters exactly.
+#[test]
+fn shadow_packet_renders_are_single_ray_renders() {
+    let mut fewer = false;
+    for (name, far) in SHADOW_SCENES
+        .iter()
+        .map(|n| (*n, false))
+        .chain([("sphere_lights_knot.txt", true)])
+    {
+        let scene = if far {
+            far_lights(own(name))
+        } else {
+            own(name)
+        };
+        let (world, camera) = world_of(&scene, AccelKind::Bvh8, true);
+        for (shadow_samples, transparent_shadows) in [(8, false), (12, false), (8, true)] {
+            let whitted = Whitted {
+                bounces: 2,
+                weight_cutoff: 0.01,
+                shadows: true,
+                shade_back: true,
+                transparent_shadows,
+                shadow_samples,
+                ..Whitted::default()
+            };
+            for (s, region) in settings((64, 24)).into_iter().take(3) {
+                let packed = render_with(&world, &camera, &whitted, (&s, region), 1);
+                let alone = render_with(&world, &camera, &Alone(whitted), (&s, region), 1);
+                let what = format!("{name} {far} {shadow_samples} {transparent_shadows} {s:?}");
+                assert!(planes(&packed.frame) == planes(&alone.frame), "{what}");
+                assert!(packed.samples == alone.samples, "{what}");
+                let rays = |c: &Counters| Counters {
+                    intersection_tests: 0,
+                    nodes_visited: 0,
+                    ..*c
+                };
+                assert_eq!(rays(&packed.counters), rays(&alone.counters), "{what}");
+                assert!(packed.counters.shadow > 0, "{what}");
+                if transparent_shadows {
+                    assert_eq!(packed.counters, alone.counters, "{what}");
+                } else {
+                    // A packet counts each node once for its rays: at most
+                    // their own walks' (as many where every packet spreads
+                    // too far for the packet walk: the spheres' lights).
+                    assert!(
+                        packed.counters.nodes_visited <= alone.counters.nodes_visited,
+                        "{what}: {:?} vs {:?}",
+                        packed.counters,
+                        alone.counters
+                    );
+                    fewer |= packed.counters.nodes_visited < alone.counters.nodes_visited;
+                }
+                let two = render_with(&world, &camera, &whitted, (&s, region), 2);
+                assert!(planes(&two.frame) == planes(&packed.frame), "{what}");
+                assert_eq!(two.counters, packed.counters, "{what}");
+                assert!(packed.frame.color.iter().any(|c| *c != Vec3::ZERO));
+            }
+        }
+    }
+    assert!(fewer, "no render took a shadow packet's walk");
+}
+
+/// A ray tree's observer sees the same rays, in the same order, whether
+/// the shadow rays go in packets or alone (`Trace::blocked_packet` tells
+/// it ray after ray).
+#[test]
+fn shadow_packets_show_the_observer_every_ray_in_order() {
+    use crate::integrator::{Branch, RayRecorder, Trace};
+    let scene = far_lights(own("sphere_lights_knot.txt"));
+    let (world, camera) = world_of(&scene, AccelKind::Bvh8, true);
+    let whitted = Whitted {
+        shadows: true,
+        shadow_samples: 12,
+        ..Whitted::default()
+    };
+    let sampler = Sampler::new(SamplerKind::Sobol, 1, 3);
+    let (w, h) = (40u32, 30u32);
+    let (mut shadow_rays, mut fewer) = (0, false);
+    for j in 0..h {
+        for i in 0..w {
+            let trace = |packets: bool| {
+                let mut stream = sampler.stream((i, j), 0);
+                let o = stream.next_2d();
+                let ray = camera.sample_ray(screen_point(i, j, o, w, h), &mut stream);
+                let mut rec = RayRecorder::default();
+                let mut counters = Counters::default();
+                let cx = &mut Trace {
+                    world: &world,
+                    stream: &mut stream,
+                    counters: &mut counters,
+                    observer: &mut rec,
+                    packets,
+                };
+                let (c, _) = whitted.trace_sampled(cx, &ray, camera.tmin(), Branch::CAMERA);
+                // (Debug text: a blocked shadow ray's `t_end` is NaN.)
+                let rays = format!("{:?}", rec.rays);
+                let nodes = counters.nodes_visited;
+                (
+                    (c.to_array().map(f32::to_bits), rays, rec.rays.len()),
+                    nodes,
+                )
+            };
+            let ((packed, n_packed), (alone, n_alone)) = (trace(true), trace(false));
+            assert_eq!(packed, alone, "pixel ({i}, {j})");
+            assert!(n_packed <= n_alone, "pixel ({i}, {j})");
+            fewer |= n_packed < n_alone;
+            shadow_rays += alone.2.saturating_sub(1);
+        }
+    }
+    assert!(
+        shadow_rays > 0 && fewer,
+        "{shadow_rays} shadow rays, packets {fewer}"
+    );
+}

@@ -75,6 +75,7 @@ impl<I: Integrator> Step<'_, I> {
             stream,
             counters,
             observer: &mut NoObserver,
+            packets: self.world.walks_packets(),
         };
         self.integrator.li(cx, &ray, self.camera.tmin())
     }
@@ -102,6 +103,7 @@ impl<I: Integrator> Step<'_, I> {
             stream,
             counters,
             observer: &mut NoObserver,
+            packets: self.world.walks_packets(),
         };
         cx.seen(ray, hit, Branch::CAMERA);
         self.integrator.li_hit(cx, ray, self.camera.tmin(), hit)

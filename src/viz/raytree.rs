@@ -94,6 +94,7 @@ fn trace_recorded<I: Integrator>(
         stream,
         counters: &mut Counters::default(),
         observer: &mut rec,
+        packets: false,
     };
     let (color, _) = integrator.li(cx, ray, tmin);
     RayTree {

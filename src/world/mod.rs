@@ -423,6 +423,54 @@ impl World {
         }
     }
 
+    /// [`occluded_leaving`](Self::occluded_leaving) of each ray of a
+    /// packet (at most [`PACKET`] rays, each in its own `(tmin, tmax)`),
+    /// every ray spawned off primitive `from`: bit `r` set when something
+    /// blocks ray `r`, its answer alone bit for bit. The planes first, ray
+    /// by ray; the rays they do not block then go to the aggregate as one
+    /// packet (`Aggregate::occluded_packet`: the wide BVH walks them
+    /// together, others ask ray by ray with the same statistics).
+    ///
+    /// # Panics
+    /// If `rays` holds more than [`PACKET`] rays.
+    pub fn occluded_packet(&self, rays: &[PacketRay], from: Option<u32>, c: &mut Counters) -> u32 {
+        assert!(rays.len() <= PACKET);
+        if rays.is_empty() {
+            return 0;
+        }
+        // What `occluded_leaving` skips: the triangle in the aggregate, or
+        // the plane among the unbounded primitives.
+        let (plane, except) =
+            match from.and_then(|i| self.prims.get(i as usize).map(|p| (i, &p.shape))) {
+                Some((i, Shape::Triangle(_))) => (None, i),
+                Some((i, Shape::Plane(_))) => (Some(i), u32::MAX),
+                _ => (None, u32::MAX),
+            };
+        let except = [except; PACKET];
+        if self.unbounded.is_empty() {
+            return (self.accel).occluded_packet(&self.prims, rays, &except[..rays.len()], c);
+        }
+        let mut blocked = 0;
+        let mut rest = [rays[0]; PACKET];
+        let mut index = [0u8; PACKET];
+        let mut n = 0;
+        for (r, q) in rays.iter().enumerate() {
+            if self.unbounded_occludes(&q.ray, q.tmin, q.tmax, plane, c) {
+                blocked |= 1 << r;
+            } else {
+                (rest[n], index[n]) = (*q, r as u8);
+                n += 1;
+            }
+        }
+        if n > 0 {
+            let b = (self.accel).occluded_packet(&self.prims, &rest[..n], &except[..n], c);
+            for (k, &r) in index[..n].iter().enumerate() {
+                blocked |= (b >> k & 1) << r;
+            }
+        }
+        blocked
+    }
+
     /// A world-space ray in this world's rendering space (the origin moved
     /// in f64; `t` is unchanged).
     pub fn ray_from_world(&self, ray: &Ray) -> Ray {

@@ -51,6 +51,7 @@ pub fn eye_ray<I: Integrator>(
         stream: &mut stream,
         counters,
         observer,
+        packets: false,
     };
     integrator.li(cx, ray, tmin)
 }

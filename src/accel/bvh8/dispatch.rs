@@ -214,21 +214,37 @@ impl<F: Fallback + ?Sized, S: TraversalStats> Walk for AnyHit<'_, F, S> {
         let (t, q) = (&self.tree, self.query);
         let rd = &RayData::new(q.ray);
         let (range, skip, stats) = ((q.tmin, q.tmax), self.skip, &mut *self.stats);
-        match (t.deep, rd.reduce_as_ints(range.0)) {
-            (false, true) => by_octant!(rd, |O| traverse::any::<S, F, _, SHALLOW, O, true>(
-                bt, t, rd, range, skip, stats
-            )),
-            (true, true) => {
-                traverse::any::<S, F, _, DEEP, ANY_OCTANT, true>(bt, t, rd, range, skip, stats)
-            }
-            // Rare (a negative `tmin`, an origin beyond about 1e20): one copy
-            // per stack, the octant read at run time.
-            (false, false) => {
-                traverse::any::<S, F, _, SHALLOW, ANY_OCTANT, false>(bt, t, rd, range, skip, stats)
-            }
-            (true, false) => {
-                traverse::any::<S, F, _, DEEP, ANY_OCTANT, false>(bt, t, rd, range, skip, stats)
-            }
+        any_one(bt, t, rd, range, skip, stats)
+    }
+}
+
+/// [`AnyHit`]'s walk of one ray: the copy per octant on the usual path
+/// (see [`by_octant`]). Also the walk of a packet's rays that the packet
+/// walk does not take (`packet::any`), so that they cost no more than
+/// alone.
+#[inline(always)]
+pub(crate) fn any_one<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest>(
+    bt: B,
+    t: &Tree<F>,
+    rd: &RayData,
+    range: (f32, f32),
+    skip: u32,
+    stats: &mut S,
+) -> bool {
+    match (t.deep, rd.reduce_as_ints(range.0)) {
+        (false, true) => by_octant!(rd, |O| traverse::any::<S, F, _, SHALLOW, O, true>(
+            bt, t, rd, range, skip, stats
+        )),
+        (true, true) => {
+            traverse::any::<S, F, _, DEEP, ANY_OCTANT, true>(bt, t, rd, range, skip, stats)
+        }
+        // Rare (a negative `tmin`, an origin beyond about 1e20): one copy
+        // per stack, the octant read at run time.
+        (false, false) => {
+            traverse::any::<S, F, _, SHALLOW, ANY_OCTANT, false>(bt, t, rd, range, skip, stats)
+        }
+        (true, false) => {
+            traverse::any::<S, F, _, DEEP, ANY_OCTANT, false>(bt, t, rd, range, skip, stats)
         }
     }
 }

@@ -382,6 +382,16 @@ impl Aggregate for Bvh8 {
         self.occluded_except(q, NO_ITEM, c)
     }
 
+    fn occluded_packet(
+        &self,
+        prims: &[Primitive],
+        rays: &[PacketRay],
+        except: &[u32],
+        c: &mut Counters,
+    ) -> u32 {
+        self.any_packet(prims, rays, except, c)
+    }
+
     fn occluded_except(&self, q: Query, except: u32, c: &mut Counters) -> bool {
         self.any_query(q.prims, &q, except, c)
     }

@@ -363,11 +363,11 @@ pub(crate) fn any<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: 
     let mut hit = 0u32;
     for (r, q) in rays.iter().enumerate() {
         if walked & 1 << r == 0 {
+            // The single walk (`dispatch::AnyHit`): a packet the frustum
+            // refuses costs its rays no more than their own walks.
             let rd = &RayData::new(&q.ray);
             let skip = skip.get(r).copied().unwrap_or(NO_ITEM);
-            let range = (q.tmin, q.tmax);
-            let h =
-                traverse::any::<S, F, B, N, ANY_OCTANT, false>(bt, tree, rd, range, skip, stats);
+            let h = super::dispatch::any_one(bt, tree, rd, (q.tmin, q.tmax), skip, stats);
             hit |= u32::from(h) << r;
         }
     }
