@@ -3,7 +3,8 @@
 //! `cargo run --release --example packet_rays -- MESH.obj PREFIX KIND [PASSES] [EVERY]`
 //! with KIND one of `camera8` (the camera rays as 4x2-pixel packets),
 //! `camera1` (the same rays one at a time), `shadow8` (eight consecutive
-//! shadow rays a packet), `shadow1`. Runs PASSES passes (default 3) over
+//! shadow rays a packet), `shadow1`, `incoherent1` (the incoherent rays one
+//! at a time). Runs PASSES passes (default 3) over
 //! every EVERY-th packet (default 1; a larger one makes a short workload for
 //! callgrind) and prints the best pass's Mrays/s and the checksums (hits and
 //! sum of `t`, or occluded rays), which equal `glint bench rays`'s for EVERY
@@ -38,7 +39,7 @@ fn read_rays(path: &str) -> Result<Vec<PacketRay>, String> {
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
     let usage =
-        "usage: packet_rays MESH.obj PREFIX camera8|camera1|shadow8|shadow1 [PASSES] [EVERY]";
+        "usage: packet_rays MESH.obj PREFIX camera8|camera1|shadow8|shadow1|incoherent1 [PASSES] [EVERY]";
     let arg = |i: usize| args.get(i).ok_or(usage);
     let num = |i: usize, d: usize| args.get(i).map_or(Ok(d), |s| s.parse().map_err(|_| usage));
     let (kind, passes, every) = (arg(3)?.as_str(), num(4, 3)?, num(5, 1)?.max(1));
@@ -46,6 +47,8 @@ fn main() -> Result<(), String> {
     let scene = MeshScene::new(&mesh.positions, &mesh.triangles).map_err(|e| e.to_string())?;
     let file = if kind.starts_with("camera") {
         "primary"
+    } else if kind.starts_with("incoherent") {
+        "incoherent"
     } else {
         "shadow"
     };
@@ -80,7 +83,7 @@ fn main() -> Result<(), String> {
                         tsum += f64::from(h.t);
                     }
                 }
-                "camera1" => {
+                "camera1" | "incoherent1" => {
                     for r in p {
                         if let Some(h) = scene.intersect(&r.ray, r.tmin, r.tmax) {
                             hits += 1;
