@@ -130,13 +130,28 @@ pub fn sincos_turn(u: f32) -> (f32, f32) {
         + a2 * (-0.5
             + a2 * (1.0 / 24.0
                 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40_320.0 - a2 * (1.0 / 3_628_800.0)))));
-    // Rotate by q quarter turns (q in -4..=4; two's complement & 3 is q mod 4).
-    match (q as i32) & 3 {
-        0 => (s, c),
-        1 => (c, -s),
-        2 => (-s, -c),
-        _ => (-c, s),
-    }
+    rotate_quarters(s, c, q as i32)
+}
+
+/// `(sin, cos)` of an angle `q` quarter turns further (`q` mod 4 is taken
+/// from the two's complement bits): `(s, c)`, `(c, −s)`, `(−s, −c)`,
+/// `(−c, s)` for `q` mod 4 = 0, 1, 2, 3. An odd quarter swaps the two; the
+/// sine's sign flips for 2 and 3, the cosine's for 1 and 2. Done on the
+/// bits with masks, not a `match`: the quarter is random from call to
+/// call, and the `match`'s jump table was mispredicted at most calls
+/// (callgrind --branch-sim, dof_spheres_lit: 70% of its jumps, 28% of
+/// all the render's mispredicts).
+#[inline(always)]
+fn rotate_quarters(s: f32, c: f32, q: i32) -> (f32, f32) {
+    let q = q as u32;
+    let odd = (q & 1).wrapping_neg();
+    let (sb, cb) = (s.to_bits(), c.to_bits());
+    let sin = (sb & !odd) | (cb & odd);
+    let cos = (cb & !odd) | (sb & odd);
+    (
+        f32::from_bits(sin ^ ((q & 2) << 30)),
+        f32::from_bits(cos ^ (q.wrapping_add(1) & 2) << 30),
+    )
 }
 
 #[cfg(test)]
@@ -222,6 +237,32 @@ mod tests {
             }
         }
         assert!(worst > 0.0 && worst < 2.5e-7, "{worst}");
+    }
+
+    /// The masks rotate as negation and swapping do, bit for bit (zeros,
+    /// NaN and infinities included), for every quarter `sincos_turn` makes.
+    #[test]
+    fn rotate_quarters_is_the_quarter_turn() {
+        let reference = |s: f32, c: f32, q: i32| match q & 3 {
+            0 => (s, c),
+            1 => (c, -s),
+            2 => (-s, -c),
+            _ => (-c, s),
+        };
+        let vals = [0.0, -0.0, 0.5, -0.75, 1.0, f32::NAN, f32::INFINITY, -1e-40];
+        for q in -4..=4 {
+            for &s in &vals {
+                for &c in &vals {
+                    let (a, b) = rotate_quarters(s, c, q);
+                    let (x, y) = reference(s, c, q);
+                    assert_eq!(
+                        (a.to_bits(), b.to_bits()),
+                        (x.to_bits(), y.to_bits()),
+                        "{q}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
