@@ -78,30 +78,28 @@ pub fn offset_ray_origin(p: Vec3, err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
 /// `x.next_up()` where `offset > 0`, `x.next_down()` where `offset < 0`,
 /// else `x`, bit for bit, without branches: the sign of an offset follows
 /// the surface's normal, which changes from hit to hit, and branches on it
-/// were mispredicted. Every choice is an all-ones or all-zeros mask, so the
-/// compiler has no condition left to branch on (written with `if`s, it
-/// branched; perf, sphere_lights_knot: the mispredicted jumps were a fifth
-/// of `Spawn::spawn_ray_to_surface`).
+/// were mispredicted. Each choice is a `select_unpredictable` (a
+/// conditional move) and each condition a plain `&`/`|` of comparisons:
+/// written with `if`s, or with masks, the compiler branched on them (perf,
+/// sphere_lights_knot: the mispredicted jumps were a fifth of
+/// `Spawn::spawn_ray_to_surface`).
 #[inline(always)]
 pub fn step_away(x: f32, offset: f32) -> f32 {
+    use std::hint::select_unpredictable as pick;
     const SIGN: u32 = 0x8000_0000;
     const INF: u32 = 0x7f80_0000;
-    let mask = |c: bool| u32::from(c).wrapping_neg();
-    let (up, down) = (mask(offset > 0.0), mask(offset < 0.0));
+    let (up, down) = (offset > 0.0, offset < 0.0);
     let bits = x.to_bits();
     let abs = bits & !SIGN;
-    let negative = mask(bits & SIGN != 0);
-    // Away from zero: a positive x stepped up, a negative one down (set
-    // only where the offset has a sign; elsewhere `x` is kept anyway).
-    let grow = (up & !negative) | (down & negative);
-    // One up in the bit pattern away from zero, one down towards it.
-    let stepped = bits.wrapping_add((grow & 2).wrapping_sub(1));
+    // Away from zero: a positive x stepped up, a negative one down.
+    let grow = up == (bits & SIGN == 0);
+    let stepped = pick(grow, bits.wrapping_add(1), bits.wrapping_sub(1));
     // ±0 steps to the smallest subnormal of the step's sign.
-    let zero = mask(abs == 0);
-    let stepped = (zero & (1 | (!up & SIGN))) | (!zero & stepped);
-    // NaN stays, and so does an infinity stepped further out.
-    let keep = !(up | down) | mask(abs > INF) | (mask(abs == INF) & grow);
-    f32::from_bits((keep & bits) | (!keep & stepped))
+    let stepped = pick(abs == 0, pick(up, 1, SIGN | 1), stepped);
+    // NaN stays, and so does an infinity stepped further out (one up from
+    // an infinity's bits is a NaN's).
+    let keep = !(up | down) | (abs > INF) | (stepped & !SIGN > INF);
+    f32::from_bits(pick(keep, bits, stepped))
 }
 
 /// `(sin 2πu, cos 2πu)` for a turn fraction `u` in `[−1, 1]`, within
