@@ -164,12 +164,19 @@ fn sobol_upper_reversed(d: usize, i: u32) -> u32 {
 /// in each elementary box of volume 2^(3−m), so a pixel's positions and
 /// the next 2-D decision (a lens point) are stratified jointly, not only
 /// each on its own.
-#[inline]
+#[cfg(test)]
 pub fn point_2d_upper(index: u32, shuffle: u32, sx: u32, sy: u32) -> (u32, u32) {
-    let i = owen_scramble(index, shuffle);
+    reverse_pair(upper_reversed(owen_scramble(index, shuffle), sx, sy))
+}
+
+/// [`point_2d_upper`] of the already shuffled index `i`
+/// (`owen_scramble(index, shuffle)`), both coordinates still bit-reversed
+/// (for [`unit_pair`]).
+#[inline]
+pub fn upper_reversed(i: u32, sx: u32, sy: u32) -> (u32, u32) {
     (
-        laine_karras(sobol_upper_reversed(0, i), sx).reverse_bits(),
-        laine_karras(sobol_upper_reversed(1, i), sy).reverse_bits(),
+        laine_karras(sobol_upper_reversed(0, i), sx),
+        laine_karras(sobol_upper_reversed(1, i), sy),
     )
 }
 
@@ -188,7 +195,7 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
 
 /// Nested uniform (Owen) scramble of a 32-bit binary fraction: each bit is
 /// flipped by a hash of the bits above it.
-#[inline]
+#[cfg(test)]
 pub fn owen_scramble(x: u32, seed: u32) -> u32 {
     laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
@@ -203,12 +210,51 @@ pub fn owen_scramble(x: u32, seed: u32) -> u32 {
 /// reverses its argument first, which undoes `sobol_dim0`'s reversal, and
 /// dimension 1 comes reversed from its table. Same values (a unit test
 /// compares with the definition).
-#[inline]
+#[cfg(test)]
 pub fn point_2d(index: u32, shuffle: u32, sx: u32, sy: u32) -> (u32, u32) {
-    let i = owen_scramble(index, shuffle);
+    reverse_pair(point_reversed(owen_scramble(index, shuffle), sx, sy))
+}
+
+/// [`point_2d`] of the already shuffled index `i`
+/// (`owen_scramble(index, shuffle)`), both coordinates still bit-reversed:
+/// the two final reversals are left to one 64-bit reversal of the pair
+/// ([`unit_pair`]).
+#[inline]
+pub fn point_reversed(i: u32, sx: u32, sy: u32) -> (u32, u32) {
     (
-        scrambled_dim0(i, sx),
-        laine_karras(sobol_dim1_reversed(i), sy).reverse_bits(),
+        laine_karras(i, sx),
+        laine_karras(sobol_dim1_reversed(i), sy),
+    )
+}
+
+/// `owen_scramble(index, shuffle)` from `index.reverse_bits()`: a stream
+/// reverses its index once for all its dimensions, so the scramble's first
+/// reversal is not repeated per value.
+#[inline]
+pub fn shuffle_reversed(index_reversed: u32, shuffle: u32) -> u32 {
+    laine_karras(index_reversed, shuffle).reverse_bits()
+}
+
+/// `(a.reverse_bits(), b.reverse_bits())` as one 64-bit reversal: on the
+/// x86-64 baseline a reversal is a byte swap and three mask-and-shift
+/// rounds (no single instruction), and the 64-bit rounds cost the same as
+/// the 32-bit ones, so the pair costs about one reversal instead of two.
+#[cfg(test)]
+fn reverse_pair((a, b): (u32, u32)) -> (u32, u32) {
+    let r = (a as u64 | (b as u64) << 32).reverse_bits();
+    ((r >> 32) as u32, r as u32)
+}
+
+/// `Vec2(unit_from_u32(a.reverse_bits()), unit_from_u32(b.reverse_bits()))`
+/// with the reversals done as one 64-bit reversal (see `reverse_pair`): the
+/// top 24 bits of each reversed half, scaled by 2^-24 (exact in `f32`).
+#[inline]
+pub fn unit_pair((a, b): (u32, u32)) -> crate::math::Vec2 {
+    let r = (a as u64 | (b as u64) << 32).reverse_bits();
+    let scale = 1.0 / (1u32 << 24) as f32;
+    crate::math::Vec2::new(
+        (r >> 40) as u32 as f32 * scale,
+        (r as u32 >> 8) as f32 * scale,
     )
 }
 
@@ -267,6 +313,15 @@ mod tests {
             );
             assert_eq!(point_2d(index, shuffle, sx, sy), want);
             assert_eq!(scrambled_dim0(i, sx), want.0);
+            let want_upper = (
+                owen_scramble(sobol_upper_bits(2, i), sx),
+                owen_scramble(sobol_upper_bits(3, i), sy),
+            );
+            assert_eq!(point_2d_upper(index, shuffle, sx, sy), want_upper);
+            assert_eq!(shuffle_reversed(index.reverse_bits(), shuffle), i);
+            let (x, y) = point_reversed(i, sx, sy);
+            let unit = |v: u32| crate::sampler::hash::unit_from_u32(v.reverse_bits());
+            assert_eq!(unit_pair((x, y)), crate::math::Vec2::new(unit(x), unit(y)));
         }
     }
 
