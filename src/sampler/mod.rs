@@ -198,7 +198,7 @@ impl Sampler {
                     ((cy + jy) / ky as f32).min(ONE_BELOW),
                 )
             }
-            SamplerKind::Sobol => SobolDim::new(prefix, key, dim).value(index.reverse_bits()),
+            SamplerKind::Sobol => SobolDim::new(prefix, key, dim).value(sobol::reverse(index)),
         }
     }
 
@@ -233,7 +233,7 @@ impl Sampler {
                 let s = permute(index % self.spp, self.spp, h as u32) as f32;
                 ((s + unit_f32(hash(&[h, index as u64]))) / n).min(ONE_BELOW)
             }
-            SamplerKind::Sobol => sobol_1d(h, index.reverse_bits()),
+            SamplerKind::Sobol => sobol_1d(h, sobol::reverse(index)),
         }
     }
 
@@ -263,7 +263,7 @@ impl Sampler {
 #[inline]
 fn sobol_1d(h: u64, index_reversed: u32) -> f32 {
     let i = sobol::shuffle_reversed(index_reversed, h as u32);
-    hash::unit_from_u32(sobol::scrambled_dim0(i, (h >> 32) as u32))
+    sobol::unit_dim0(i, (h >> 32) as u32)
 }
 
 /// What the Sobol values of one 2-D dimension of one pixel share: the
@@ -330,7 +330,7 @@ struct SobolIndex {
 impl SobolIndex {
     #[inline]
     fn new(prefix: u64, index: u32) -> Self {
-        let index_reversed = index.reverse_bits();
+        let index_reversed = sobol::reverse(index);
         let h0 = DimKey::hash(prefix, 0);
         Self {
             index_reversed,

@@ -96,7 +96,7 @@ impl Iterator for Split2d {
         }
         let index = self.base + self.k;
         let v = match &self.source {
-            Source::Sobol(d) => d.value(index.reverse_bits()),
+            Source::Sobol(d) => d.value(super::sobol::reverse(index)),
             Source::Other {
                 sampler,
                 prefix,
