@@ -33,8 +33,10 @@ pub fn unit_f32(h: u64) -> f32 {
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
-/// A float in `[0, 1)` from the top 24 bits of a 32-bit value.
-#[inline]
+/// A float in `[0, 1)` from the top 24 bits of a 32-bit value (the
+/// definition of a Sobol coordinate's float; the samplers convert from the
+/// coordinate's reversed bits, `sobol::unit_pair`).
+#[cfg(test)]
 pub fn unit_from_u32(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }

@@ -122,12 +122,15 @@ impl Sampler {
     /// `j` up), at dimension 0.
     pub fn stream(&self, pixel: (u32, u32), index: u32) -> SampleStream<'_> {
         let pixel_key = (pixel.0 as u64) | (pixel.1 as u64) << 32;
+        let prefix = self.prefix(pixel_key);
         SampleStream {
             sampler: self,
             pixel_key,
-            prefix: self.prefix(pixel_key),
+            prefix,
             index,
             dim: 0,
+            sobol: (matches!(self.kind, SamplerKind::Sobol) && index != u32::MAX)
+                .then(|| SobolIndex::new(prefix, index)),
         }
     }
 
@@ -143,6 +146,7 @@ impl Sampler {
             prefix: self.prefix(pixel_key),
             index: u32::MAX,
             dim: 1,
+            sobol: None,
         }
     }
 
@@ -194,22 +198,7 @@ impl Sampler {
                     ((cy + jy) / ky as f32).min(ONE_BELOW),
                 )
             }
-            SamplerKind::Sobol if dim == 1 => {
-                // Sobol dimensions 2 and 3 of the pixel position's point
-                // (the same index shuffle as dimension 0's): the pixel
-                // position and this first 2-D decision after it (the lens
-                // point of a thin-lens camera) are stratified jointly. With
-                // independent shuffles, as further dimensions are, the
-                // pairing of pixel and lens positions is random, and so is
-                // the coverage of a defocused edge.
-                let h0 = hash_from(prefix, &[0]);
-                let (x, y) = sobol::point_2d_upper(index, h0 as u32, (h >> 32) as u32, key.mixed);
-                Vec2::new(hash::unit_from_u32(x), hash::unit_from_u32(y))
-            }
-            SamplerKind::Sobol => {
-                let (x, y) = sobol::point_2d(index, h as u32, (h >> 32) as u32, key.mixed);
-                Vec2::new(hash::unit_from_u32(x), hash::unit_from_u32(y))
-            }
+            SamplerKind::Sobol => SobolDim::new(prefix, key, dim).value(sobol::reverse(index)),
         }
     }
 
@@ -228,7 +217,7 @@ impl Sampler {
 
     /// Value of 1-D dimension `dim`.
     fn value_1d(&self, prefix: u64, index: u32, dim: u32) -> f32 {
-        let h = hash_from(prefix, &[dim as u64, 1]);
+        let h = Self::hash_1d(prefix, dim);
         let kind = if index == u32::MAX {
             SamplerKind::Random
         } else {
@@ -244,11 +233,14 @@ impl Sampler {
                 let s = permute(index % self.spp, self.spp, h as u32) as f32;
                 ((s + unit_f32(hash(&[h, index as u64]))) / n).min(ONE_BELOW)
             }
-            SamplerKind::Sobol => {
-                let i = sobol::owen_scramble(index, h as u32);
-                hash::unit_from_u32(sobol::scrambled_dim0(i, (h >> 32) as u32))
-            }
+            SamplerKind::Sobol => sobol_1d(h, sobol::reverse(index)),
         }
+    }
+
+    /// The hash of 1-D dimension `dim` under the stream's `prefix`.
+    #[inline]
+    fn hash_1d(prefix: u64, dim: u32) -> u64 {
+        hash_from(prefix, &[dim as u64, 1])
     }
 
     /// Grid cell of sample `index` in dimension `dim`: the index itself for
@@ -266,6 +258,110 @@ impl Sampler {
     }
 }
 
+/// The Sobol value of a 1-D dimension whose hash is `h`, for the sample
+/// whose index reversed is `index_reversed`.
+#[inline]
+fn sobol_1d(h: u64, index_reversed: u32) -> f32 {
+    let i = sobol::shuffle_reversed(index_reversed, h as u32);
+    sobol::unit_dim0(i, (h >> 32) as u32)
+}
+
+/// What the Sobol values of one 2-D dimension of one pixel share: the
+/// index shuffle's seed and the two coordinates' scramble seeds.
+#[derive(Clone, Copy, Debug)]
+struct SobolDim {
+    shuffle: u32,
+    sx: u32,
+    sy: u32,
+    /// Dimension 1: Sobol dimensions 2 and 3 of the pixel position's point
+    /// (the same index shuffle as dimension 0's), so that the pixel
+    /// position and this first 2-D decision after it (the lens point of a
+    /// thin-lens camera) are stratified jointly. With independent shuffles,
+    /// as further dimensions have, the pairing of pixel and lens positions
+    /// is random, and so is the coverage of a defocused edge.
+    upper: bool,
+}
+
+impl SobolDim {
+    /// Dimension `dim` whose hash under the stream's `prefix` is `key`.
+    #[inline]
+    fn new(prefix: u64, key: DimKey, dim: u32) -> Self {
+        let upper = dim == 1;
+        let shuffle = if upper {
+            DimKey::hash(prefix, 0)
+        } else {
+            key.h
+        };
+        Self {
+            shuffle: shuffle as u32,
+            sx: (key.h >> 32) as u32,
+            sy: key.mixed,
+            upper,
+        }
+    }
+
+    /// The value of the sample whose index reversed is `index_reversed`.
+    #[inline]
+    fn value(&self, index_reversed: u32) -> Vec2 {
+        self.value_shuffled(sobol::shuffle_reversed(index_reversed, self.shuffle))
+    }
+
+    /// The value of the shuffled index `i` (`owen_scramble(index, shuffle)`).
+    #[inline]
+    fn value_shuffled(&self, i: u32) -> Vec2 {
+        sobol::unit_pair(if self.upper {
+            sobol::upper_reversed(i, self.sx, self.sy)
+        } else {
+            sobol::point_reversed(i, self.sx, self.sy)
+        })
+    }
+}
+
+/// What a Sobol stream's values share, worked out once per stream: its
+/// index reversed (the first step of every index shuffle) and dimension
+/// 0's hash and shuffled index, which dimension 1 shares.
+#[derive(Clone, Copy, Debug)]
+struct SobolIndex {
+    index_reversed: u32,
+    shuffled0: u32,
+    h0: u64,
+}
+
+impl SobolIndex {
+    #[inline]
+    fn new(prefix: u64, index: u32) -> Self {
+        let index_reversed = sobol::reverse(index);
+        let h0 = DimKey::hash(prefix, 0);
+        Self {
+            index_reversed,
+            shuffled0: sobol::shuffle_reversed(index_reversed, h0 as u32),
+            h0,
+        }
+    }
+
+    /// The 2-D value of dimension `dim` under the stream's `prefix`: the
+    /// same as [`Sampler::value_2d`].
+    #[inline]
+    fn value_2d(&self, prefix: u64, dim: u32) -> Vec2 {
+        match dim {
+            0 => sobol::unit_pair(sobol::point_reversed(
+                self.shuffled0,
+                (self.h0 >> 32) as u32,
+                mix64(self.h0) as u32,
+            )),
+            1 => {
+                let key = DimKey::new(prefix, 1);
+                sobol::unit_pair(sobol::upper_reversed(
+                    self.shuffled0,
+                    (key.h >> 32) as u32,
+                    key.mixed,
+                ))
+            }
+            _ => SobolDim::new(prefix, DimKey::new(prefix, dim), dim).value(self.index_reversed),
+        }
+    }
+}
+
 /// The largest `f32` below 1.
 const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -278,6 +374,9 @@ pub struct SampleStream<'a> {
     prefix: u64,
     index: u32,
     dim: u32,
+    /// The per-stream part of a Sobol stream's values (`None` for other
+    /// kinds and for key streams).
+    sobol: Option<SobolIndex>,
 }
 
 impl SampleStream<'_> {
@@ -293,13 +392,19 @@ impl SampleStream<'_> {
     /// computes only those it uses.
     #[inline]
     pub fn get_2d(&self, dim: u32) -> Vec2 {
-        self.sampler.value_2d(self.prefix, self.index, dim)
+        match &self.sobol {
+            Some(s) => s.value_2d(self.prefix, dim),
+            None => self.sampler.value_2d(self.prefix, self.index, dim),
+        }
     }
 
     /// The 1-D value of dimension `dim`, as [`get_2d`](Self::get_2d).
     #[inline]
     pub fn get_1d(&self, dim: u32) -> f32 {
-        self.sampler.value_1d(self.prefix, self.index, dim)
+        match &self.sobol {
+            Some(s) => sobol_1d(Sampler::hash_1d(self.prefix, dim), s.index_reversed),
+            None => self.sampler.value_1d(self.prefix, self.index, dim),
+        }
     }
 
     /// The next 1-D value in `[0, 1)`.
@@ -385,11 +490,17 @@ impl DimKey {
     /// Dimension `dim` under the stream's `prefix`.
     #[inline]
     pub(crate) fn new(prefix: u64, dim: u32) -> Self {
-        let h = hash_from(prefix, &[dim as u64]);
+        let h = Self::hash(prefix, dim);
         Self {
             h,
             mixed: mix64(h) as u32,
         }
+    }
+
+    /// The dimension's hash alone.
+    #[inline]
+    fn hash(prefix: u64, dim: u32) -> u64 {
+        hash_from(prefix, &[dim as u64])
     }
 }
 

@@ -164,12 +164,19 @@ fn sobol_upper_reversed(d: usize, i: u32) -> u32 {
 /// in each elementary box of volume 2^(3−m), so a pixel's positions and
 /// the next 2-D decision (a lens point) are stratified jointly, not only
 /// each on its own.
-#[inline]
+#[cfg(test)]
 pub fn point_2d_upper(index: u32, shuffle: u32, sx: u32, sy: u32) -> (u32, u32) {
-    let i = owen_scramble(index, shuffle);
+    reverse_pair(upper_reversed(owen_scramble(index, shuffle), sx, sy))
+}
+
+/// [`point_2d_upper`] of the already shuffled index `i`
+/// (`owen_scramble(index, shuffle)`), both coordinates still bit-reversed
+/// (for [`unit_pair`]).
+#[inline]
+pub fn upper_reversed(i: u32, sx: u32, sy: u32) -> (u32, u32) {
     (
-        laine_karras(sobol_upper_reversed(0, i), sx).reverse_bits(),
-        laine_karras(sobol_upper_reversed(1, i), sy).reverse_bits(),
+        laine_karras(sobol_upper_reversed(0, i), sx),
+        laine_karras(sobol_upper_reversed(1, i), sy),
     )
 }
 
@@ -188,7 +195,7 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
 
 /// Nested uniform (Owen) scramble of a 32-bit binary fraction: each bit is
 /// flipped by a hash of the bits above it.
-#[inline]
+#[cfg(test)]
 pub fn owen_scramble(x: u32, seed: u32) -> u32 {
     laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
@@ -198,25 +205,102 @@ pub fn owen_scramble(x: u32, seed: u32) -> u32 {
 /// `sy`, as 32-bit binary fractions.
 ///
 /// Written with four bit reversals instead of the definition's seven
-/// (`owen_scramble(sobol_dim0(i), sx)`, `owen_scramble(sobol_dim1(i), sy)`;
-/// a reversal is about a dozen instructions on x86-64): the scramble
-/// reverses its argument first, which undoes `sobol_dim0`'s reversal, and
-/// dimension 1 comes reversed from its table. Same values (a unit test
-/// compares with the definition).
-#[inline]
+/// (`owen_scramble(sobol_dim0(i), sx)`, `owen_scramble(sobol_dim1(i), sy)`):
+/// the scramble reverses its argument first, which undoes `sobol_dim0`'s
+/// reversal, and dimension 1 comes reversed from its table. Same values (a
+/// unit test compares with the definition). The samplers go further, from
+/// the parts below: a stream reverses its index once
+/// ([`shuffle_reversed`]), and the coordinates' final reversals are folded
+/// into their conversion to floats ([`unit_pair`]).
+#[cfg(test)]
 pub fn point_2d(index: u32, shuffle: u32, sx: u32, sy: u32) -> (u32, u32) {
-    let i = owen_scramble(index, shuffle);
+    reverse_pair(point_reversed(owen_scramble(index, shuffle), sx, sy))
+}
+
+/// [`point_2d`] of the already shuffled index `i`
+/// (`owen_scramble(index, shuffle)`), both coordinates still bit-reversed
+/// (for [`unit_pair`]).
+#[inline]
+pub fn point_reversed(i: u32, sx: u32, sy: u32) -> (u32, u32) {
     (
-        scrambled_dim0(i, sx),
-        laine_karras(sobol_dim1_reversed(i), sy).reverse_bits(),
+        laine_karras(i, sx),
+        laine_karras(sobol_dim1_reversed(i), sy),
     )
+}
+
+/// `owen_scramble(index, shuffle)` from `index.reverse_bits()`: a stream
+/// reverses its index once for all its dimensions, so the scramble's first
+/// reversal is not repeated per value.
+#[inline]
+pub fn shuffle_reversed(index_reversed: u32, shuffle: u32) -> u32 {
+    reverse(laine_karras(index_reversed, shuffle))
+}
+
+/// `REVERSED_BYTES[k][b]`: byte `b` at byte `k` of a `u32`, bits reversed
+/// (4 KB, computed at compile time). Bit reversal is an OR of one entry per
+/// byte.
+static REVERSED_BYTES: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut k = 0;
+    while k < 4 {
+        let mut b = 0;
+        while b < 256 {
+            t[k][b] = ((b as u32) << (8 * k)).reverse_bits();
+            b += 1;
+        }
+        k += 1;
+    }
+    t
+};
+
+/// `x.reverse_bits()` by table: four loads and ORs. On the x86-64 baseline
+/// there is no reversal instruction, and `reverse_bits` is a byte swap and
+/// three mask-and-shift rounds (about 17 instructions).
+#[inline]
+pub fn reverse(x: u32) -> u32 {
+    let t = &REVERSED_BYTES;
+    t[0][(x & 0xff) as usize]
+        | t[1][(x >> 8 & 0xff) as usize]
+        | t[2][(x >> 16 & 0xff) as usize]
+        | t[3][(x >> 24) as usize]
+}
+
+/// `unit_from_u32(x.reverse_bits())`: only the top 24 bits of the reversal
+/// are kept, the reversal of the low three bytes of `x`, so the top byte's
+/// entry is not needed.
+#[inline]
+fn unit_reversed(x: u32) -> f32 {
+    let t = &REVERSED_BYTES;
+    let top = t[0][(x & 0xff) as usize]
+        | t[1][(x >> 8 & 0xff) as usize]
+        | t[2][(x >> 16 & 0xff) as usize];
+    (top >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// Both coordinates reversed.
+#[cfg(test)]
+fn reverse_pair((a, b): (u32, u32)) -> (u32, u32) {
+    (a.reverse_bits(), b.reverse_bits())
+}
+
+/// `Vec2(unit_from_u32(a.reverse_bits()), unit_from_u32(b.reverse_bits()))`:
+/// a point from its bit-reversed coordinates.
+#[inline]
+pub fn unit_pair((a, b): (u32, u32)) -> crate::math::Vec2 {
+    crate::math::Vec2::new(unit_reversed(a), unit_reversed(b))
 }
 
 /// `owen_scramble(sobol_dim0(i), seed)`: the scramble's first reversal
 /// undoes `sobol_dim0`'s.
-#[inline]
+#[cfg(test)]
 pub fn scrambled_dim0(i: u32, seed: u32) -> u32 {
     laine_karras(i, seed).reverse_bits()
+}
+
+/// `unit_from_u32(scrambled_dim0(i, seed))`.
+#[inline]
+pub fn unit_dim0(i: u32, seed: u32) -> f32 {
+    unit_reversed(laine_karras(i, seed))
 }
 
 #[cfg(test)]
@@ -267,6 +351,15 @@ mod tests {
             );
             assert_eq!(point_2d(index, shuffle, sx, sy), want);
             assert_eq!(scrambled_dim0(i, sx), want.0);
+            let want_upper = (
+                owen_scramble(sobol_upper_bits(2, i), sx),
+                owen_scramble(sobol_upper_bits(3, i), sy),
+            );
+            assert_eq!(point_2d_upper(index, shuffle, sx, sy), want_upper);
+            assert_eq!(shuffle_reversed(index.reverse_bits(), shuffle), i);
+            let (x, y) = point_reversed(i, sx, sy);
+            let unit = |v: u32| crate::sampler::hash::unit_from_u32(v.reverse_bits());
+            assert_eq!(unit_pair((x, y)), crate::math::Vec2::new(unit(x), unit(y)));
         }
     }
 
@@ -328,6 +421,22 @@ mod tests {
                     sobol_upper_reversed(d, x).reverse_bits(),
                     sobol_upper_bits(d + 2, x)
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn table_reversal_is_reverse_bits() {
+        let mut x = 0x9e37_79b9u32;
+        for i in (0..70_000).chain([u32::MAX, 1 << 31, 0x00ff_ff00]) {
+            x = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            for v in [i, x] {
+                assert_eq!(reverse(v), v.reverse_bits());
+                let unit = crate::sampler::hash::unit_from_u32(v.reverse_bits());
+                assert_eq!(unit_reversed(v), unit);
+                assert_eq!(unit_dim0(v, x), {
+                    crate::sampler::hash::unit_from_u32(scrambled_dim0(v, x))
+                });
             }
         }
     }

@@ -9,21 +9,33 @@
 //! are stratified together: splitting and supersampling give the same
 //! quality per ray, as the lecture's cost formula assumes.
 
-use super::{DimKey, GridLayout, SampleStream, Sampler, SamplerKind};
+use super::{DimKey, GridLayout, SampleStream, Sampler, SamplerKind, SobolDim};
 use crate::math::Vec2;
 
 /// The `n` values of one split dimension; see [`SampleStream::split_2d`].
 #[derive(Clone, Debug)]
 pub struct Split2d {
-    sampler: Sampler,
-    /// The hash prefix of the seed and the (possibly re-keyed) pixel.
-    prefix: u64,
-    /// The dimension's hash, shared by its `n` values.
-    key: DimKey,
+    source: Source,
     base: u32,
     dim: u32,
     k: u32,
     n: u32,
+}
+
+/// Where a split's values come from.
+#[derive(Clone, Debug)]
+enum Source {
+    /// Sobol points: what the dimension's values share, worked out once
+    /// (they depend on neither the sample count nor the grid).
+    Sobol(SobolDim),
+    /// Any other layout, run with `spp·n` samples per pixel.
+    Other {
+        sampler: Sampler,
+        /// The hash prefix of the seed and the (possibly re-keyed) pixel.
+        prefix: u64,
+        /// The dimension's hash, shared by its `n` values.
+        key: DimKey,
+    },
 }
 
 impl SampleStream<'_> {
@@ -48,17 +60,25 @@ impl SampleStream<'_> {
         } else {
             self.index.saturating_mul(n)
         };
-        let key = if self.index == u32::MAX {
-            self.pixel_key ^ 0x5151_0000_0000_0000
+        // A sample's own pixel keeps its stream's prefix (the same seed
+        // and pixel key); a key stream's values are keyed apart from it.
+        let prefix = if self.index == u32::MAX {
+            s.prefix(self.pixel_key ^ 0x5151_0000_0000_0000)
         } else {
-            self.pixel_key
+            self.prefix
         };
-        let sampler = Sampler::new(kind, s.spp.saturating_mul(n), s.seed);
-        let prefix = sampler.prefix(key);
+        let key = DimKey::new(prefix, dim);
+        let source = if matches!(kind, SamplerKind::Sobol) {
+            Source::Sobol(SobolDim::new(prefix, key, dim))
+        } else {
+            Source::Other {
+                sampler: Sampler::new(kind, s.spp.saturating_mul(n), s.seed),
+                prefix,
+                key,
+            }
+        };
         Split2d {
-            prefix,
-            key: DimKey::new(prefix, dim),
-            sampler,
+            source,
             base,
             dim,
             k: 0,
@@ -74,9 +94,15 @@ impl Iterator for Split2d {
         if self.k == self.n {
             return None;
         }
-        let v = self
-            .sampler
-            .value_2d_keyed(self.prefix, self.key, self.base + self.k, self.dim);
+        let index = self.base + self.k;
+        let v = match &self.source {
+            Source::Sobol(d) => d.value(super::sobol::reverse(index)),
+            Source::Other {
+                sampler,
+                prefix,
+                key,
+            } => sampler.value_2d_keyed(*prefix, *key, index, self.dim),
+        };
         self.k += 1;
         Some(v)
     }

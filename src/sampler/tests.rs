@@ -168,3 +168,55 @@ fn names_round_trip() {
         .to_string()
         .contains("halton"));
 }
+
+/// Sobol value of 2-D dimension `dim` of sample `index` of the pixel with
+/// key `pixel_key`, straight from the definitions (the stream's hashes,
+/// `owen_scramble` of the Sobol dimensions): what the streams and splits,
+/// with their work shared per stream and per dimension, must give bit for
+/// bit.
+fn sobol_2d_definition(seed: u64, pixel_key: u64, index: u32, dim: u32) -> Vec2 {
+    let prefix = hash(&[seed, pixel_key]);
+    let h = hash(&[seed, pixel_key, dim as u64]);
+    let (sx, sy) = ((h >> 32) as u32, mix64(h) as u32);
+    let (x, y) = if dim == 1 {
+        let h0 = hash_from(prefix, &[0]);
+        sobol::point_2d_upper(index, h0 as u32, sx, sy)
+    } else {
+        sobol::point_2d(index, h as u32, sx, sy)
+    };
+    Vec2::new(hash::unit_from_u32(x), hash::unit_from_u32(y))
+}
+
+/// As [`sobol_2d_definition`], for 1-D dimension `dim`.
+fn sobol_1d_definition(seed: u64, pixel_key: u64, index: u32, dim: u32) -> f32 {
+    let h = hash(&[seed, pixel_key, dim as u64, 1]);
+    let i = sobol::owen_scramble(index, h as u32);
+    hash::unit_from_u32(sobol::owen_scramble(sobol::sobol_dim0(i), (h >> 32) as u32))
+}
+
+#[test]
+fn sobol_streams_and_splits_give_the_definitions_values() {
+    for (seed, spp) in [(0u64, 16u32), (7, 4), (0xdead_beef, 64)] {
+        let s = Sampler::new(SamplerKind::Sobol, spp, seed);
+        for (i, j) in [(0u32, 0u32), (3, 4), (511, 383), (70_000, 2)] {
+            let key = i as u64 | (j as u64) << 32;
+            for index in [0, 1, 5, spp - 1, spp + 3, 1 << 20] {
+                let st = s.stream((i, j), index);
+                for dim in 0..12 {
+                    let want = sobol_2d_definition(seed, key, index, dim);
+                    assert_eq!(st.get_2d(dim), want, "2-D dim {dim} index {index}");
+                    let want = sobol_1d_definition(seed, key, index, dim);
+                    assert_eq!(st.get_1d(dim), want, "1-D dim {dim} index {index}");
+                }
+                for (dim, n) in [(0, 3u32), (1, 4), (1, 1), (2, 16), (5, 7)] {
+                    let mut st = s.stream((i, j), index);
+                    st.skip_n(dim);
+                    for (k, v) in st.split_2d(n).enumerate() {
+                        let want = sobol_2d_definition(seed, key, index * n + k as u32, dim);
+                        assert_eq!(v, want, "split dim {dim} n {n} value {k}");
+                    }
+                }
+            }
+        }
+    }
+}
