@@ -46,6 +46,15 @@ fn bits(h: &Option<Hit>) -> Vec<u32> {
 /// The scenes of the tests: a 1k-triangle mesh on a plane (smooth
 /// normals), spheres and planes with a sky, moving shapes under a
 /// shutter (each camera ray at its own time), a thin lens.
+/// The accelerators the packet tests compare: bvh8 walks packets, the
+/// others answer ray by ray.
+const ACCELS: [AccelKind; 4] = [
+    AccelKind::Bvh8,
+    AccelKind::Bvh(Split::Sah),
+    AccelKind::Grid { res: None },
+    AccelKind::None,
+];
+
 const SCENES: [&str; 4] = [
     "mesh_knot_1k.txt",
     "whitted.txt",
@@ -66,12 +75,7 @@ fn packet_hits_are_single_ray_hits() {
     let (mut hits, mut misses) = (0, 0);
     for name in SCENES {
         let scene = own(name);
-        for accel in [
-            AccelKind::Bvh8,
-            AccelKind::Bvh(Split::Sah),
-            AccelKind::Grid { res: None },
-            AccelKind::None,
-        ] {
+        for accel in ACCELS {
             for flatten in [true, false] {
                 let (world, camera) = world_of(&scene, accel, flatten);
                 assert_eq!(world.walks_packets(), accel == AccelKind::Bvh8);
@@ -302,12 +306,7 @@ fn shadow_packet_answers_are_single_ray_answers() {
     let (mut blocked, mut clear) = (0, 0);
     for name in SHADOW_SCENES {
         let scene = own(name);
-        for accel in [
-            AccelKind::Bvh8,
-            AccelKind::Bvh(Split::Sah),
-            AccelKind::Grid { res: None },
-            AccelKind::None,
-        ] {
+        for accel in ACCELS {
             for flatten in [true, false] {
                 let (world, camera) = world_of(&scene, accel, flatten);
                 let (mut alone, mut packed) = (Counters::default(), Counters::default());
