@@ -25,22 +25,29 @@
 #         one row each; ONLY_PHOTONS=1 leaves out the three rows without it.
 #   VENV  virtual environment for mitsuba (default target/mitsuba-venv; created and
 #         `pip install mitsuba` (and numpy, which `path` reads the images with) on first use)
-#   REPS  repetitions (default 3): medians are reported
+#   REPS  repetitions (default 3): medians are reported. The 1-spp rows take three times as
+#         many: those renders last a tenth of a second to a second, and on this 2-core virtual
+#         machine one such render's time alone spreads by a quarter from run to run (a profile of
+#         one shows both threads busy for the whole render), so three medians left the 2-thread
+#         speed-up to chance.
 #   SIZE  image size of scene6_07 (default 800)
 # Samples per pixel: 1, and 16 when `glint render --help` lists --spp (or SPPS="1 16"). Threads: 1 and 2 for glint;
 # Mitsuba is timed with its default (all cores) pool on scene6_07, which is what its README figure is,
 # and with 2 threads (both cores here) on the two scenes of scenes/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# The virtual environment with both modules the script imports (mitsuba, and numpy for the
+# images' means and RMSEs), made or completed on first use.
+venv_ready() {
+  [ -x "$1/bin/python" ] || python3 -m venv "$1"
+  "$1/bin/python" -c "import mitsuba, numpy" 2>/dev/null || "$1/bin/pip" install --quiet mitsuba numpy
+}
 if [ "${1:-}" = path ]; then
   venv=${2:-target/mitsuba-venv}
   spp=${3:-64}
   reps=${4:-3}
   median() { python3 -c "import statistics, sys; print(statistics.median(map(float, sys.argv[1:])))" "$@"; }
-  if ! [ -x "$venv/bin/python" ]; then
-    python3 -m venv "$venv"
-    "$venv/bin/pip" install --quiet mitsuba numpy
-  fi
+  venv_ready "$venv"
   cargo build --release --quiet --bin glint
   tmp=$(mktemp -d)
   echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -98,10 +105,7 @@ reps=${2:-3}
 size=${3:-800}
 shared=../shared
 [ -d "$shared/anchors" ] || shared=/work/shared
-if ! [ -x "$venv/bin/python" ]; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet mitsuba
-fi
+venv_ready "$venv"
 cargo build --release --quiet --bin glint
 spps=${SPPS:-}
 if [ -z "$spps" ]; then
@@ -129,7 +133,8 @@ for spp in $spps; do
   m=(); g2=(); g1=()
   extra=()
   [ "$spp" = 1 ] || extra=(--spp "$spp")
-  for _ in $(seq 1 "$reps"); do
+  n=$reps; [ "$spp" != 1 ] || n=$((reps * 3))
+  for _ in $(seq 1 "$n"); do
     m+=("$("$venv/bin/python" "$shared/anchors/mitsuba_scene6_07.py" "$shared" "$size" "$spp" | sed -E 's/.*: ([0-9.]+) s/\1/')")
     for t in 2 1; do
       # glint's own timer: the render alone (scene loading and BVH build excluded, as for Mitsuba).
@@ -150,7 +155,8 @@ for spec in sphere_lights_knot:512:384 dof_spheres_lit:512:512; do
   IFS=: read -r name w h <<<"$spec"
   for spp in $spps; do
     m=(); g2=(); g1=()
-    for _ in $(seq 1 "$reps"); do
+    n=$reps; [ "$spp" != 1 ] || n=$((reps * 3))
+    for _ in $(seq 1 "$n"); do
       m+=("$("$venv/bin/python" scripts/mitsuba_twin.py "scenes/$name.txt" "$tmp/m.exr" --whitted \
         --size "$w" "$h" --spp "$spp" --threads 2 | sed -E 's/.*: ([0-9.]+) s/\1/')")
       for t in 2 1; do
