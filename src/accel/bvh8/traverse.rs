@@ -102,7 +102,17 @@ impl<'a, F: Fallback + ?Sized> Tree<'a, F> {
         near: &mut Nearest,
     ) -> u64 {
         let mut tests = 0;
-        for b in self.leaf(c) {
+        let blocks = self.leaf(c);
+        // The first block was asked for with the leaf (or is being loaded
+        // now); the others are asked for at once, so that their loads
+        // overlap the first block's test instead of following it (on
+        // meshes larger than the cache, the blocks' loads are a quarter of
+        // the incoherent walk's time). Not in the any-hit walk, which stops
+        // at the first block that blocks: measured, no gain there.
+        for b in blocks.iter().skip(1) {
+            prefetch(b);
+        }
+        for b in blocks {
             if S::ENABLED {
                 tests += b.items();
             }
