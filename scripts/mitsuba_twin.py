@@ -453,7 +453,7 @@ def main():
     dr.set_thread_count(pool)
     mi.Bitmap(img).write(a.out)
     print(f"mitsuba {mi.__version__} {mi.variant()} {width}x{height} spp {spp} seed {a.seed} "
-          f"threads {a.threads}: {dt:.2f} s")
+          f"threads {a.threads}: {dt:.4f} s")
 
 
 if __name__ == "__main__":
