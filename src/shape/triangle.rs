@@ -40,8 +40,9 @@ impl WatertightRay {
         // both others, else `y` where it is at least `z`, else `z` (a NaN
         // component fails its comparisons, as the `if` chain this replaces
         // did). Traversal computes this once per ray, and the axis varies
-        // from ray to ray: a branch on it was mispredicted about half the
-        // time on incoherent rays (callgrind, bunny40k).
+        // from ray to ray: the branch it compiled to went each way about
+        // half the time on incoherent rays (callgrind, bunny40k), which a
+        // predictor cannot follow.
         let a = ray.dir.abs();
         let x_wins = (a.x >= a.y) & (a.x >= a.z);
         let y_wins = a.y >= a.z;
