@@ -628,34 +628,10 @@ fn cone_pdf(p: Vec3, center: Vec3, radius: f32) -> f32 {
 }
 
 /// A point of the sphere seen from `p`: a direction uniform in the cone
-/// the sphere fills (density [`cone_pdf`]), and where it meets the sphere.
+/// the sphere fills (density [`cone_pdf`]), and where it meets the sphere
+/// (the area lights' sampling, `light::area::sphere_cone`).
 fn sample_sphere_cone(p: Vec3, center: Vec3, radius: f32, u: Vec2) -> Option<SurfacePoint> {
-    let dc = center - p;
-    let d2 = dc.length_squared();
-    let r2 = radius * radius;
-    if d2 <= r2 {
-        return None;
-    }
-    let dist = d2.sqrt();
-    let wc = dc / dist;
-    let sin2 = r2 / d2;
-    let cos_max = (1.0 - sin2).max(0.0).sqrt();
-    let one_minus = sin2 / (1.0 + cos_max);
-    let cos_t = 1.0 - u.x * one_minus;
-    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-    let phi = TAU * u.y;
-    let (x, y) = wc.any_orthonormal_pair();
-    let w = x * (sin_t * phi.cos()) + y * (sin_t * phi.sin()) + wc * cos_t;
-    // The nearer root of |p + t·w − c|² = r²; at the cone's rim rounding
-    // may leave no root: take the tangent point.
-    let b = w.dot(dc);
-    let disc = (r2 - (dc - b * w).length_squared()).max(0.0);
-    let t = b - disc.sqrt();
-    let q = p + w * t;
-    let n = (q - center).normalize_or_zero();
-    let q = center + n * radius;
-    let error = crate::math::gamma(5) * (center.abs() + (n * radius).abs());
-    (n != Vec3::ZERO).then_some(SurfacePoint { p: q, error, n })
+    crate::light::area::sphere_cone(center, radius, p, u).map(|s| s.at)
 }
 
 impl Integrator for PathTracer {

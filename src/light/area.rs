@@ -265,7 +265,7 @@ fn from_area_point(p: Vec3, at: SurfacePoint, area: f32, radiance: Vec3) -> Inci
 /// A direction of the cone a sphere subtends from a point outside it, and
 /// where it meets the sphere.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct ConeSample {
+pub(crate) struct ConeSample {
     /// Unit direction from the point.
     pub w: Vec3,
     /// The nearest point of the sphere along `w`.
@@ -281,7 +281,7 @@ pub(super) struct ConeSample {
 /// sample hits the visible cap, and the density `1 / Ω` is the same for
 /// all. `None` when `p` is inside the sphere.
 #[inline]
-pub(super) fn sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> Option<ConeSample> {
+pub(crate) fn sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> Option<ConeSample> {
     Some(Cone::new(c, r, p)?.sample(u))
 }
 
