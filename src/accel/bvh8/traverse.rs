@@ -584,8 +584,11 @@ fn lanes_of(b: &Tri4, id: u32) -> u32 {
 /// Pushes the children in `mask` (at least two) far to near and returns the
 /// nearest, so that the nearest is visited first and the others are popped
 /// in order of distance; starts loading each ([`Tree::prefetch_child`]).
+/// Three or more in a walk with `I` take the sorted push of
+/// [`order_keyed`].
 #[inline(always)]
-fn order<F: Fallback + ?Sized>(
+fn order<F: Fallback + ?Sized, B: BoxTest, const I: bool>(
+    bt: B,
     tree: &Tree<F>,
     node: &Node,
     mut mask: u32,
@@ -595,6 +598,7 @@ fn order<F: Fallback + ?Sized>(
 ) -> u32 {
     // An array, not `Lanes` indexing: a `Vec4` indexed by a run-time lane
     // compiles to a jump table.
+    let lanes = dist;
     let dist = dist.to_array();
     let second = mask & (mask - 1);
     if second & (second - 1) == 0 {
@@ -613,6 +617,11 @@ fn order<F: Fallback + ?Sized>(
         *sp += 1;
         return near.0;
     }
+    // (The sorted push writes eight entries: the insertion sort below where
+    // the stack has no room for them, which no tree fills in practice.)
+    if I && *sp + W <= stack.len() {
+        return order_keyed(bt, tree, node, mask, lanes, stack, sp);
+    }
     let mut kids = [(0u32, 0f32); W];
     let mut k = 0;
     while mask != 0 {
@@ -629,6 +638,143 @@ fn order<F: Fallback + ?Sized>(
     }
     kids[k - 1].0
 }
+
+/// [`order`] of three or more children whose entry distances are not
+/// negative (a walk with `I`): each child's sort key is its distance's
+/// bit pattern (ordered as the distance is) with the low three bits
+/// replaced by `7 − slot`, so keys are distinct, ordered by distance down
+/// to 8 ulps and, nearer than that, the higher slot first (as `order`'s
+/// compare). The keys sorted far to near are pushed with the distance
+/// they carry (at most 7 ulps short of the true one: a pending child is
+/// dropped on a slightly stricter test, never one that could hold the
+/// hit). On AVX2, a sorting network on the eight lanes and two 32-byte
+/// stores: no branch per child, where the insertion sort took a
+/// data-dependent branch per child placed.
+#[inline(always)]
+fn order_keyed<F: Fallback + ?Sized, B: BoxTest>(
+    bt: B,
+    tree: &Tree<F>,
+    node: &Node,
+    mask: u32,
+    dist: Lanes,
+    stack: &mut [(u32, f32)],
+    sp: &mut usize,
+) -> u32 {
+    let k = mask.count_ones() as usize;
+    let mut m = mask;
+    while m != 0 {
+        tree.prefetch_child(node.child[m.trailing_zeros() as usize]);
+        m &= m - 1;
+    }
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx) = bt.avx() {
+        return order_keyed_avx(avx, node, mask, k, dist, stack, sp);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = bt;
+    let dist = dist.to_array();
+    let mut keys = [i32::MIN; W];
+    for (i, key) in keys.iter_mut().enumerate() {
+        if mask >> i & 1 != 0 {
+            *key = (dist[i].to_bits() & !7 | (7 - i as u32)) as i32;
+        }
+    }
+    keys.sort_unstable_by(|a, b| b.cmp(a));
+    let entry = |key: i32| {
+        let key = key as u32;
+        (node.child[7 - (key & 7) as usize], f32::from_bits(key & !7))
+    };
+    let out = &mut stack[*sp..*sp + W];
+    for (o, &key) in out.iter_mut().zip(&keys[..k]) {
+        *o = entry(key);
+    }
+    *sp += k - 1;
+    entry(keys[k - 1]).0
+}
+
+/// [`order_keyed`] on AVX2: the keys of the eight lanes (`i32::MIN` for
+/// the children missed) sorted by a bitonic network of `vpmaxsd`/`vpminsd`
+/// (six stages), the children gathered by their slots (`vpermd`), and the
+/// eight (child, distance) pairs stored at the top of the stack, of which
+/// the first `k` are the children hit, far to near.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn order_keyed_avx(
+    _: Avx,
+    node: &Node,
+    mask: u32,
+    k: usize,
+    dist: Lanes,
+    stack: &mut [(u32, f32)],
+    sp: &mut usize,
+) -> u32 {
+    use std::arch::x86_64::*;
+    let out = &mut stack[*sp..*sp + W];
+    // SAFETY: an `Avx` value exists only where AVX2 was detected at run
+    // time (see `Avx::new`). `Lanes` is eight contiguous f32s and
+    // `node.child` eight u32s (32 bytes each), read by unaligned loads in
+    // bounds; `out` is eight (u32, f32) pairs, 64 bytes, written by two
+    // unaligned 32-byte stores in bounds (child at offset 0 and distance
+    // at 4 in each pair: asserted at compile time below).
+    unsafe {
+        let d = _mm256_loadu_si256(&dist as *const Lanes as *const __m256i);
+        let slot = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
+        // All ones in the lanes of the children hit.
+        let hit = _mm256_cmpgt_epi32(
+            _mm256_and_si256(
+                _mm256_set1_epi32(mask as i32),
+                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128),
+            ),
+            _mm256_setzero_si256(),
+        );
+        let key = _mm256_or_si256(_mm256_andnot_si256(_mm256_set1_epi32(7), d), slot);
+        let key = _mm256_blendv_epi8(_mm256_set1_epi32(i32::MIN), key, hit);
+        // A compare-exchange stage: each lane against its partner `p`
+        // (lane `i ^ j`), the larger key kept in the lanes of `MAX`. Six
+        // stages (partners 1; 2, 1; 4, 2, 1) sort the eight lanes, largest
+        // first.
+        macro_rules! stage {
+            ($v:expr, $p:expr, $max:literal) => {{
+                let (v, p) = ($v, $p);
+                _mm256_blend_epi32::<$max>(_mm256_min_epi32(v, p), _mm256_max_epi32(v, p))
+            }};
+        }
+        let x1 = |v| _mm256_shuffle_epi32::<0b1011_0001>(v);
+        let x2 = |v| _mm256_shuffle_epi32::<0b0100_1110>(v);
+        let x4 = |v| _mm256_permute4x64_epi64::<0b0100_1110>(v);
+        // The nearest child (the smallest key hit) by its own reduction,
+        // beside the network: the walk goes on with it while the others
+        // are sorted and stored.
+        let near = _mm256_blendv_epi8(_mm256_set1_epi32(i32::MAX), key, hit);
+        let near = _mm256_min_epi32(near, x1(near));
+        let near = _mm256_min_epi32(near, x2(near));
+        let near = _mm256_min_epi32(near, x4(near));
+        let nearest = node.child[((_mm256_cvtsi256_si32(near) as u32 & 7) ^ 7) as usize];
+        let v = stage!(key, x1(key), 0b1001_1001);
+        let v = stage!(v, x2(v), 0b1100_0011);
+        let v = stage!(v, x1(v), 0b1010_0101);
+        let v = stage!(v, x4(v), 0b0000_1111);
+        let v = stage!(v, x2(v), 0b0011_0011);
+        let v = stage!(v, x1(v), 0b0101_0101);
+        // Slot `7 − (key & 7)` is `key ^ 7` in the three bits `vpermd` reads.
+        let child = _mm256_loadu_si256(node.child.as_ptr() as *const __m256i);
+        let child = _mm256_permutevar8x32_epi32(child, _mm256_xor_si256(v, _mm256_set1_epi32(7)));
+        let dist = _mm256_andnot_si256(_mm256_set1_epi32(7), v);
+        let (lo, hi) = (
+            _mm256_unpacklo_epi32(child, dist),
+            _mm256_unpackhi_epi32(child, dist),
+        );
+        let p = out.as_mut_ptr() as *mut __m256i;
+        _mm256_storeu_si256(p, _mm256_permute2x128_si256::<0x20>(lo, hi));
+        _mm256_storeu_si256(p.add(1), _mm256_permute2x128_si256::<0x31>(lo, hi));
+        *sp += k - 1;
+        nearest
+    }
+}
+
+// The entries' layout the AVX push writes: child, then distance.
+const _: () =
+    assert!(std::mem::offset_of!((u32, f32), 0) == 0 && std::mem::offset_of!((u32, f32), 1) == 4);
 
 /// Inserts `e` into `kids[..k]` (one step of an insertion sort), kept far
 /// to near by `dist`; `e` goes after (nearer than) the entries as far as
@@ -761,7 +907,7 @@ pub(crate) fn closest<
             } else if mask & (mask - 1) == 0 {
                 node.child[mask.trailing_zeros() as usize]
             } else {
-                order(tree, node, mask, dist, &mut stack, &mut sp)
+                order::<F, B, I>(bt, tree, node, mask, dist, &mut stack, &mut sp)
             };
         }
         if cur != EMPTY {

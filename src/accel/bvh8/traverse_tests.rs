@@ -288,3 +288,79 @@ fn test_tmax_is_next_up_of_the_best_hit() {
     };
     assert_eq!(n.test_tmax(), 5.0);
 }
+
+/// `order` of three or more children in a walk with non-negative
+/// distances (the keyed, sorted push), on both copies where the CPU has
+/// AVX2: the children hit are pushed far to near by distance down to 8
+/// ulps (nearer than that, the higher slot first), each with its distance
+/// at most 7 ulps short, the nearest returned and not pushed; the AVX2
+/// network's stack is the portable sort's, entry for entry.
+#[test]
+fn the_sorted_push_orders_children_far_to_near() {
+    let mut node = Node::EMPTY;
+    for (s, c) in node.child.iter_mut().enumerate() {
+        *c = 100 + s as u32;
+    }
+    let tree = Tree {
+        nodes: &[],
+        tris: &[],
+        fallback: &TrianglesOnly,
+        deep: false,
+    };
+    let mut r = crate::accel::testutil::Rng::new(3);
+    for round in 0..20_000 {
+        let mask = loop {
+            let m = r.u64() as u32 & 0xff;
+            if m.count_ones() >= 3 {
+                break m;
+            }
+        };
+        // Distances from 0 up, with ties and near-ties now and then.
+        let base = r.f() * 10.0;
+        let d: [f32; W] = std::array::from_fn(|_| match round % 3 {
+            0 => r.f() * 10.0,
+            1 => f32::from_bits(base.to_bits() + (r.f() * 12.0) as u32),
+            _ => (r.f() * 3.0).floor(),
+        });
+        let dist = Lanes([Vec4::from_slice(&d[..4]), Vec4::from_slice(&d[4..])]);
+        let run = |avx: bool| {
+            let mut stack = [(0u32, 0f32); SHALLOW];
+            let mut sp = 5;
+            #[cfg(target_arch = "x86_64")]
+            let near = if avx {
+                // SAFETY: only called where AVX2 and FMA were detected.
+                let bt = unsafe { Avx::new() };
+                order::<_, _, true>(bt, &tree, &node, mask, dist, &mut stack, &mut sp)
+            } else {
+                order::<_, _, true>(Portable, &tree, &node, mask, dist, &mut stack, &mut sp)
+            };
+            #[cfg(not(target_arch = "x86_64"))]
+            let near = order::<_, _, true>(Portable, &tree, &node, mask, dist, &mut stack, &mut sp);
+            (near, stack[5..sp].to_vec())
+        };
+        let (near, pushed) = run(false);
+        let k = mask.count_ones() as usize;
+        assert_eq!(pushed.len(), k - 1);
+        let key = |c: u32| {
+            let s = (c - 100) as usize;
+            assert!(mask >> s & 1 != 0, "slot {s} was not hit");
+            (d[s].to_bits() & !7, std::cmp::Reverse(s))
+        };
+        let mut seen: Vec<u32> = pushed.iter().map(|e| e.0).collect();
+        seen.push(near);
+        for w in seen.windows(2) {
+            assert!(key(w[0]) > key(w[1]), "{mask:08b} {d:?}: {seen:?}");
+        }
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen.len(), k);
+        for &(c, e) in &pushed {
+            let t = d[(c - 100) as usize];
+            assert!(e <= t && t.to_bits() - e.to_bits() <= 7, "{e} for {t}");
+        }
+        #[cfg(target_arch = "x86_64")]
+        if crate::testdata::avx2_fma("the_sorted_push_orders_children_far_to_near") {
+            assert_eq!(run(true), (near, pushed));
+        }
+    }
+}
