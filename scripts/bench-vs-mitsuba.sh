@@ -34,6 +34,11 @@
 # Samples per pixel: 1, and 16 when `glint render --help` lists --spp (or SPPS="1 16"). Threads: 1 and 2 for glint;
 # Mitsuba is timed with its default (all cores) pool on scene6_07, which is what its README figure is,
 # and with 2 threads (both cores here) on the two scenes of scenes/.
+# Order in each repetition: Mitsuba, glint on 1 thread, glint on 2. A thread of the Mitsuba process
+# was still running for some milliseconds after the process had been waited for (perf sched: 7 ms
+# on one core, inside glint's render), which cost a 2-thread glint render that came right after it
+# a core: the depth-of-field render at 1 spp read 39-43 ms on 2 threads after a Mitsuba run, 36-39
+# after a glint run (7 each, alternated); a 1-thread render leaves it the other core.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # The virtual environment with both modules the script imports (mitsuba, and numpy for the
@@ -136,7 +141,7 @@ for spp in $spps; do
   n=$reps; [ "$spp" != 1 ] || n=$((reps * 3))
   for _ in $(seq 1 "$n"); do
     m+=("$("$venv/bin/python" "$shared/anchors/mitsuba_scene6_07.py" "$shared" "$size" "$spp" | sed -E 's/.*: ([0-9.]+) s/\1/')")
-    for t in 2 1; do
+    for t in 1 2; do
       # glint's own timer: the render alone (scene loading and BVH build excluded, as for Mitsuba).
       ./target/release/glint render "$scene" -o "$tmp/glint.png" --size "$size" "$size" --shadows \
         --threads "$t" --quiet --stats-json "$tmp/stats.json" "${extra[@]}" >/dev/null
@@ -159,7 +164,7 @@ for spec in sphere_lights_knot:512:384 dof_spheres_lit:512:512; do
     for _ in $(seq 1 "$n"); do
       m+=("$("$venv/bin/python" scripts/mitsuba_twin.py "scenes/$name.txt" "$tmp/m.exr" --whitted \
         --size "$w" "$h" --spp "$spp" --threads 2 | sed -E 's/.*: ([0-9.]+) s/\1/')")
-      for t in 2 1; do
+      for t in 1 2; do
         ./target/release/glint render "scenes/$name.txt" -o "$tmp/g.exr" --size "$w" "$h" --shadows \
           --spp "$spp" --threads "$t" --quiet --stats-json "$tmp/stats.json" >/dev/null
         s=$(glint_s "$tmp/stats.json")
