@@ -49,6 +49,16 @@ pub struct Frame {
 impl Frame {
     /// A frame of misses.
     pub fn new(width: u32, height: u32) -> Self {
+        let mut f = Self::unset_depth(width, height);
+        f.depth.fill(f32::INFINITY);
+        f
+    }
+
+    /// A frame of misses but for its depth, left zero: for the band loop,
+    /// whose threads each fill their own band's depth (the fill of an
+    /// 800x800 frame's 2.5 MB on one thread, inside the render's time, was
+    /// about 1% of a 1-spp render on 2 threads).
+    pub(crate) fn unset_depth(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
         Self {
             width,
@@ -59,7 +69,7 @@ impl Frame {
             // 800x800 frame on one thread first (7,500 page faults, ~35 ms
             // of system time, before the parallel loop starts).
             color: bytemuck::zeroed_vec(n),
-            depth: vec![f32::INFINITY; n],
+            depth: bytemuck::zeroed_vec(n),
             normal: bytemuck::zeroed_vec(n),
             samples: vec![0; n],
             cost: bytemuck::zeroed_vec(n),

@@ -304,7 +304,8 @@ fn render_tiles<I: Integrator>(r: &Render<I>, region: Option<Rect>) -> Rendered 
 fn render_bands<I: Integrator>(r: &Render<I>) -> Rendered {
     let (settings, control) = (r.settings, r.control);
     let (w, h) = settings.size;
-    let mut frame = Frame::new(w, h);
+    // Each band fills its own depth (misses) before anything else.
+    let mut frame = Frame::unset_depth(w, h);
     let wu = w as usize;
     let parts: Vec<(Counters, Vec<SampleRecord>)> = frame
         .color
@@ -317,6 +318,7 @@ fn render_bands<I: Integrator>(r: &Render<I>) -> Rendered {
         .enumerate()
         .map(
             |(band, (((((color, depth), normal), samples), cost), complete))| {
+                depth.fill(f32::INFINITY);
                 if control.cancelled() {
                     return (Counters::default(), Vec::new());
                 }
@@ -550,8 +552,9 @@ mod tests {
     }
 
     /// A render cancelled before it starts traces no ray, leaves every row
-    /// incomplete and reports no progress; the same render not cancelled
-    /// is complete and not black.
+    /// incomplete, reports no progress and returns a frame of misses
+    /// (infinite depth); the same render not cancelled is complete and not
+    /// black.
     #[test]
     fn a_cancelled_render_traces_nothing() {
         let (world, camera) = small_world();
@@ -568,6 +571,7 @@ mod tests {
             let r = render_image(&world, &camera, &Whitted::default(), &s, control);
             assert_eq!(r.counters.primary, 0, "{s:?}");
             assert!(r.frame.complete.iter().all(|&c| !c), "{s:?}");
+            assert!(r.frame.depth.iter().all(|&t| t == f32::INFINITY), "{s:?}");
             assert_eq!(done.load(Ordering::Relaxed), 0);
             stop.store(false, Ordering::Relaxed);
             let r = render_image(&world, &camera, &Whitted::default(), &s, control);
