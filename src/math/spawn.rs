@@ -4,8 +4,8 @@
 //! n, w)`, which depends on the direction `w` only through the side of the
 //! surface it points to (the sign test `w·n < 0`). A shaded point sends one
 //! shadow ray per light, most of them to the same side, so [`Spawn`] keeps
-//! the origin of each side once computed (round four's profile: spawning
-//! shadow rays was 4.8% of a render, most of it in `offset_ray_origin`).
+//! the origin of each side once computed (before it, a profile put 4.8%
+//! of a render in spawning shadow rays, most of it in `offset_ray_origin`).
 //! The rays are the ones `SurfacePoint::spawn_ray`, `spawn_ray_to` and
 //! `spawn_ray_to_surface` make, bit for bit.
 
