@@ -20,6 +20,7 @@ use crate::material::{eval, phong_light, TextureSpace};
 use crate::math::{Ray, Spawn, SurfacePoint, Vec3, SHADOW_EPSILON};
 use crate::scene::{Light, Phong, RenderLight};
 use crate::world::{Hit, World};
+use glam::Vec3A;
 
 /// Area-light samples computed ahead of their shadow rays at a time.
 const SHADOW_CHUNK: usize = 4;
@@ -136,11 +137,32 @@ impl Whitted {
     ) -> Vec3 {
         match hit {
             None => cx.world.background().color,
-            Some(h) => self.shade(cx, ray, h, b),
+            Some(h) => Vec3::from(self.shade(cx, ray, h, b)),
         }
     }
 
-    fn shade<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, hit: &Hit, b: Branch) -> Vec3 {
+    /// [`shade_color`](Self::shade_color) handed back as a 16-byte value:
+    /// a `Vec3` return came back through memory as an 8-byte and a 4-byte
+    /// store, which the caller read as two overlapping 8-byte loads, and
+    /// the second cannot be forwarded from the stores (perf, scene6_07 at
+    /// 1 spp: the largest share of the pixel loop's own samples, on the
+    /// colour's first use). One 16-byte store is read back by one 16-byte
+    /// load.
+    fn shade<O: RayObserver>(&self, cx: &mut Trace<O>, ray: &Ray, hit: &Hit, b: Branch) -> Vec3A {
+        Vec3A::from(self.shade_color(cx, ray, hit, b))
+    }
+
+    /// The colour a ray at branch `b` brings back from its hit `hit`: the
+    /// ambient term, each light's (with its shadow rays) and the reflected
+    /// and refracted children.
+    #[inline(always)]
+    fn shade_color<O: RayObserver>(
+        &self,
+        cx: &mut Trace<O>,
+        ray: &Ray,
+        hit: &Hit,
+        b: Branch,
+    ) -> Vec3 {
         let world = cx.world;
         let d = ray.dir.normalize();
         let back = hit.normal.dot(d) > 0.0;
