@@ -245,28 +245,31 @@ impl World {
                 best = Some((crate::accel::PrimHit { t, prim: i }, None));
             }
         }
-        best.map(|(h, bary)| {
-            let p = &self.prims[h.prim as usize];
-            // The aggregate's barycentrics are the ones `Triangle::surface`
-            // would re-run the watertight test for (same ray, same vertices).
-            let s = match (&p.shape, bary) {
-                (Shape::Triangle(tr), Some(b)) => tr.surface_at(b),
-                (shape, _) => shape.surface(ray, h.t),
-            };
-            let shading_normal = match self.vertex_normals.get(h.prim as usize) {
-                Some(n) if n[0] != Vec3::ZERO => self.interpolated_normal(p, n, ray, bary, s.n),
-                _ => s.n,
-            };
-            Hit {
-                t: h.t,
-                point: s.p,
-                error: s.error,
-                normal: s.n,
-                shading_normal,
-                prim: h.prim,
-                material: p.material,
-                instance: p.instance,
-            }
+        // Not a closure passed to `Option::map`: compiled out of line, it
+        // handed the hit back through memory in narrower stores than the
+        // caller's 16-byte loads of it, which cannot be forwarded (perf,
+        // scene6_07: the largest share of `intersect_packet`'s samples).
+        let (h, bary) = best?;
+        let p = &self.prims[h.prim as usize];
+        // The aggregate's barycentrics are the ones `Triangle::surface`
+        // would re-run the watertight test for (same ray, same vertices).
+        let s = match (&p.shape, bary) {
+            (Shape::Triangle(tr), Some(b)) => tr.surface_at(b),
+            (shape, _) => shape.surface(ray, h.t),
+        };
+        let shading_normal = match self.vertex_normals.get(h.prim as usize) {
+            Some(n) if n[0] != Vec3::ZERO => self.interpolated_normal(p, n, ray, bary, s.n),
+            _ => s.n,
+        };
+        Some(Hit {
+            t: h.t,
+            point: s.p,
+            error: s.error,
+            normal: s.n,
+            shading_normal,
+            prim: h.prim,
+            material: p.material,
+            instance: p.instance,
         })
     }
 
