@@ -721,6 +721,43 @@ fn a_new_request_cancels_the_session_render() {
     no_hang(t, "the superseded render was not stopped");
 }
 
+/// Requests travel on separate connections and may arrive out of order: one
+/// numbered lower than a request the session has seen (`seq`) is answered
+/// 409 at once, and neither cancels the newer render nor touches its image.
+#[test]
+fn a_late_older_request_cancels_nothing() {
+    let s = Server::glint(&common::own_scene("mesh_knot_16k.txt"), &[]);
+    let addr = s.addr.clone();
+    let newer = std::thread::spawn(move || {
+        request(
+            &addr,
+            "GET /api/render?session=two&w=1024&h=1024&spp=4&seq=5&pass=0 HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n",
+        )
+    });
+    let t = Instant::now();
+    while s.get("/api/progress?session=two").status != 200 {
+        no_hang(t, "the newer render never started");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let older = s.get("/api/render?session=two&w=8&h=8&spp=1&seq=4&pass=0");
+    assert_eq!(older.status, 409, "{}", older.text());
+    assert!(older.text().contains("superseded"));
+    let newer = newer.join().unwrap();
+    assert_eq!(newer.png().dimensions(), (1024, 1024));
+    assert_eq!(newer.header("x-glint-spp"), Some("1"));
+    // The newer render goes on from its own pass.
+    let next = s.get("/api/render?session=two&w=1024&h=1024&spp=4&seq=5&pass=1");
+    assert_eq!(next.header("x-glint-spp"), Some("2"), "{}", next.text());
+    // Without a number a request always goes ahead, as before.
+    let plain = s.get("/api/render?session=two&w=8&h=8&spp=1&pass=0");
+    assert_eq!(plain.png().dimensions(), (8, 8));
+    assert_eq!(
+        s.get("/api/render?session=two&w=8&h=8&spp=1&seq=x&pass=0")
+            .status,
+        400
+    );
+}
+
 /// Ctrl-C (SIGINT) stops the server cleanly, with status 0.
 #[test]
 fn ctrl_c_stops_the_server() {

@@ -217,16 +217,17 @@ pub async fn render(State(app): State<Arc<App>>, Query(q): Q) -> Answer {
     let (q, version, scene, view) = setup(&app, q)?;
     let sid = params::session(&q)?;
     let want = params::pass(&q)?;
+    let seq = params::seq(&q)?;
     let session = app.session(&sid);
-    let flag = session.begin();
-    let guard = CancelOnDrop(flag.clone());
-    let target = view.spp;
     let superseded = || {
         ApiError(
             StatusCode::CONFLICT,
             "superseded by a newer request of this session".into(),
         )
     };
+    let flag = session.begin(seq).ok_or_else(superseded)?;
+    let guard = CancelOnDrop(flag.clone());
+    let target = view.spp;
     let out = blocking(&app, move |app| {
         if flag.load(Ordering::SeqCst) {
             return Err(superseded());

@@ -43,6 +43,7 @@ const KNOWN: &[&str] = &[
     "y",
     "session",
     "pass",
+    "seq",
     "overlay",
 ];
 
@@ -364,4 +365,12 @@ pub fn session(q: &HashMap<String, String>) -> Result<String, Bad> {
 /// The pass the page expects next (0 to start over).
 pub fn pass(q: &HashMap<String, String>) -> Result<u32, Bad> {
     number(q, "pass", 0, (0, limits::MAX_SAMPLES))
+}
+
+/// The request's number among the session's renders (`seq=N`), if given:
+/// a request never cancels one with a higher number.
+pub fn seq(q: &HashMap<String, String>) -> Result<Option<u32>, Bad> {
+    q.get("seq")
+        .map(|_| number(q, "seq", 0, (0, u32::MAX)))
+        .transpose()
 }

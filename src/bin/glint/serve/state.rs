@@ -73,7 +73,7 @@ pub struct Loaded {
 /// One client's render slot: at most one render at a time; a new request
 /// cancels the one running.
 pub struct Session {
-    current: Mutex<Arc<AtomicBool>>,
+    current: Mutex<Slot>,
     /// Pixels finished in the pass being rendered.
     pub pass_done: AtomicU64,
     /// Pixels of a whole pass.
@@ -81,6 +81,13 @@ pub struct Session {
     /// The accumulated image.
     pub accum: Mutex<Option<Accum>>,
     last_used: Mutex<Instant>,
+}
+
+/// The running render's cancel flag, and the highest request number the
+/// session has seen.
+struct Slot {
+    flag: Arc<AtomicBool>,
+    seq: u32,
 }
 
 /// Passes added up so far for one view.
@@ -102,7 +109,10 @@ pub struct Accum {
 impl Session {
     fn new() -> Self {
         Self {
-            current: Mutex::new(Arc::new(AtomicBool::new(false))),
+            current: Mutex::new(Slot {
+                flag: Arc::new(AtomicBool::new(false)),
+                seq: 0,
+            }),
             pass_done: AtomicU64::new(0),
             pass_total: AtomicU64::new(0),
             accum: Mutex::new(None),
@@ -110,19 +120,30 @@ impl Session {
         }
     }
 
-    /// Cancels the session's running render, and returns the flag of a new one.
-    pub fn begin(&self) -> Arc<AtomicBool> {
-        let flag = Arc::new(AtomicBool::new(false));
+    /// Cancels the session's running render, and returns the flag of a new
+    /// one. A request numbered `seq` (the page counts the renders it starts)
+    /// is stale if the session has seen a higher number: requests travel on
+    /// separate connections and may arrive out of order, and an older one
+    /// must not cancel a newer. A stale request gets `None` and cancels
+    /// nothing; one without a number always goes ahead.
+    pub fn begin(&self, seq: Option<u32>) -> Option<Arc<AtomicBool>> {
         let mut cur = lock(&self.current);
-        cur.store(true, Ordering::SeqCst);
-        *cur = flag.clone();
+        if let Some(seq) = seq {
+            if seq < cur.seq {
+                return None;
+            }
+            cur.seq = seq;
+        }
+        let flag = Arc::new(AtomicBool::new(false));
+        cur.flag.store(true, Ordering::SeqCst);
+        cur.flag = flag.clone();
         *lock(&self.last_used) = Instant::now();
-        flag
+        Some(flag)
     }
 
     /// Cancels whatever the session is rendering.
     pub fn cancel(&self) {
-        lock(&self.current).store(true, Ordering::SeqCst);
+        lock(&self.current).flag.store(true, Ordering::SeqCst);
     }
 }
 
@@ -430,15 +451,15 @@ mod tests {
     fn sessions_past_the_cap_drop_the_least_recently_used() {
         let app = app();
         let first = app.session("s0");
-        let flag = first.begin();
+        let flag = first.begin(None).unwrap();
         for i in 1..MAX_SESSIONS {
-            app.session(&format!("s{i}")).begin();
+            app.session(&format!("s{i}")).begin(None);
         }
         assert_eq!(lock(&app.sessions).len(), MAX_SESSIONS);
         assert!(app.existing_session("s0").is_some());
         // s1 is touched again: s0 is now the least recently used.
-        app.session("s1").begin();
-        app.session("one-more").begin();
+        app.session("s1").begin(None);
+        app.session("one-more").begin(None);
         assert_eq!(lock(&app.sessions).len(), MAX_SESSIONS);
         assert!(app.existing_session("s0").is_none(), "s0 was kept");
         assert!(flag.load(Ordering::SeqCst), "s0's render was not cancelled");
@@ -458,14 +479,14 @@ mod tests {
         let sessions: Vec<_> = (0..fit)
             .map(|i| {
                 let s = app.session(&format!("s{i}"));
-                let flag = s.begin();
+                let flag = s.begin(None).unwrap();
                 hold(&s, side, side);
                 (s, flag)
             })
             .collect();
         // Room for a small image: nobody is dropped.
         let me = app.session("me");
-        me.begin();
+        me.begin(None);
         app.make_room(&me, MAX_ACCUM_PIXELS - fit as u64 * each);
         assert!(sessions.iter().all(|(s, _)| held(s)));
         // Room for one more large image: exactly the oldest is dropped and

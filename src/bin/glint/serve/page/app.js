@@ -91,7 +91,7 @@ async function refine() {
   while (gen === S.gen) {
     let r;
     try {
-      r = await fetch(`/api/render?${q}&session=${S.sid}&pass=${pass}`);
+      r = await fetch(`/api/render?${q}&session=${S.sid}&seq=${gen}&pass=${pass}`);
     } catch (e) { if (gen === S.gen) status('server unreachable'); break; }
     if (gen !== S.gen) return;
     if (!r.ok) {
