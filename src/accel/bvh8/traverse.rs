@@ -181,6 +181,18 @@ pub(crate) struct RayData {
     finite: bool,
 }
 
+/// An entry of a walk's stack of pending children. The stacks are arrays
+/// on the machine stack made once per query, and as plain arrays they had
+/// to be zeroed first: 512 bytes for a closest-hit walk's 64 entries,
+/// sixteen 32-byte stores a ray (1-4% of bunny40k's single-ray throughput,
+/// `examples/packet_rays`). Slots are written only by the pushes, each at
+/// the stack pointer, which then moves past it (the sorted push writes
+/// eight slots from the pointer and moves it by fewer); every read is of a
+/// slot below the pointer, after a decrement, so it was written by a push
+/// and nothing has written it since but another push. That is the proof
+/// each `assume_init` points to.
+type Slot<T> = std::mem::MaybeUninit<T>;
+
 /// The octant parameter of [`closest`] and [`any`] that reads the ray's
 /// planes from [`RayData`] at run time (`0..8` fixes them at compile time).
 pub(crate) const ANY_OCTANT: usize = 8;
@@ -593,7 +605,7 @@ fn order<F: Fallback + ?Sized, B: BoxTest, const I: bool>(
     node: &Node,
     mut mask: u32,
     dist: Lanes,
-    stack: &mut [(u32, f32)],
+    stack: &mut [Slot<(u32, f32)>],
     sp: &mut usize,
 ) -> u32 {
     // An array, not `Lanes` indexing: a `Vec4` indexed by a run-time lane
@@ -613,7 +625,7 @@ fn order<F: Fallback + ?Sized, B: BoxTest, const I: bool>(
         tree.prefetch_child(a.0);
         tree.prefetch_child(b.0);
         let (near, far) = if a.1 < b.1 { (a, b) } else { (b, a) };
-        stack[*sp] = far;
+        stack[*sp].write(far);
         *sp += 1;
         return near.0;
     }
@@ -633,7 +645,7 @@ fn order<F: Fallback + ?Sized, B: BoxTest, const I: bool>(
         k += 1;
     }
     for &e in &kids[..k - 1] {
-        stack[*sp] = e;
+        stack[*sp].write(e);
         *sp += 1;
     }
     kids[k - 1].0
@@ -657,7 +669,7 @@ fn order_keyed<F: Fallback + ?Sized, B: BoxTest>(
     node: &Node,
     mask: u32,
     dist: Lanes,
-    stack: &mut [(u32, f32)],
+    stack: &mut [Slot<(u32, f32)>],
     sp: &mut usize,
 ) -> u32 {
     let k = mask.count_ones() as usize;
@@ -686,7 +698,7 @@ fn order_keyed<F: Fallback + ?Sized, B: BoxTest>(
     };
     let out = &mut stack[*sp..*sp + W];
     for (o, &key) in out.iter_mut().zip(&keys[..k]) {
-        *o = entry(key);
+        o.write(entry(key));
     }
     *sp += k - 1;
     entry(keys[k - 1]).0
@@ -705,7 +717,7 @@ fn order_keyed_avx(
     mask: u32,
     k: usize,
     dist: Lanes,
-    stack: &mut [(u32, f32)],
+    stack: &mut [Slot<(u32, f32)>],
     sp: &mut usize,
 ) -> u32 {
     use std::arch::x86_64::*;
@@ -713,9 +725,11 @@ fn order_keyed_avx(
     // SAFETY: an `Avx` value exists only where AVX2 was detected at run
     // time (see `Avx::new`). `Lanes` is eight contiguous f32s and
     // `node.child` eight u32s (32 bytes each), read by unaligned loads in
-    // bounds; `out` is eight (u32, f32) pairs, 64 bytes, written by two
-    // unaligned 32-byte stores in bounds (child at offset 0 and distance
-    // at 4 in each pair: asserted at compile time below).
+    // bounds; `out` is eight (u32, f32) slots (`MaybeUninit` has the
+    // layout of what it holds), 64 bytes, written by two unaligned 32-byte
+    // stores in bounds (child at offset 0 and distance at 4 in each pair:
+    // asserted at compile time below). Both stores write all eight slots,
+    // so the `k − 1` the stack grows by are written.
     unsafe {
         let d = _mm256_loadu_si256(&dist as *const Lanes as *const __m256i);
         let slot = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
@@ -883,7 +897,7 @@ pub(crate) fn closest<
     let mut near = Nearest { tmax, best: None };
     let tmin4 = Lanes::splat(tmin);
     debug_assert!(!I || rd.reduce_as_ints(tmin));
-    let mut stack = [(0u32, 0f32); N];
+    let mut stack = [const { Slot::<(u32, f32)>::uninit() }; N];
     let mut sp = 0usize;
     // Made at the first leaf (see `LeafRay`).
     let mut leaf_ray = None;
@@ -927,10 +941,12 @@ pub(crate) fn closest<
 /// a hit at most `tmax` away (entries are pushed far to near, so the top is
 /// the nearest); `None` once the stack holds no such child.
 #[inline(always)]
-fn pop_nearer(stack: &[(u32, f32)], sp: &mut usize, tmax: f32) -> Option<u32> {
+fn pop_nearer(stack: &[Slot<(u32, f32)>], sp: &mut usize, tmax: f32) -> Option<u32> {
     while *sp > 0 {
         *sp -= 1;
-        let (r, d) = stack[*sp];
+        // SAFETY: the slots below the stack pointer are written (see
+        // `Slot`), and this one is below the pointer as it was.
+        let (r, d) = unsafe { stack[*sp].assume_init() };
         if d <= tmax {
             return Some(r);
         }
@@ -964,7 +980,7 @@ pub(crate) fn any<
     let (mut n_nodes, mut n_tests) = (0u64, 0u64);
     let (tmin4, tmax4) = (Lanes::splat(tmin), Lanes::splat(tmax));
     debug_assert!(!I || rd.reduce_as_ints(tmin));
-    let mut stack = [0u32; N];
+    let mut stack = [const { Slot::<u32>::uninit() }; N];
     let mut sp = 0usize;
     // Made at the first leaf (see `LeafRay`).
     let mut leaf_ray = None;
@@ -981,7 +997,8 @@ pub(crate) fn any<
                     break 'walk false;
                 }
                 sp -= 1;
-                cur = stack[sp];
+                // SAFETY: below the stack pointer (see `Slot`).
+                cur = unsafe { stack[sp].assume_init() };
                 continue;
             }
             cur = node.child[mask.trailing_zeros() as usize];
@@ -993,7 +1010,7 @@ pub(crate) fn any<
                 while mask != 0 {
                     let c = node.child[mask.trailing_zeros() as usize];
                     tree.prefetch_child(c);
-                    stack[sp] = c;
+                    stack[sp].write(c);
                     sp += 1;
                     mask &= mask - 1;
                 }
@@ -1011,7 +1028,8 @@ pub(crate) fn any<
             break 'walk false;
         }
         sp -= 1;
-        cur = stack[sp];
+        // SAFETY: below the stack pointer (see `Slot`).
+        cur = unsafe { stack[sp].assume_init() };
     };
     stats.add(n_nodes, n_tests);
     hit

@@ -324,7 +324,7 @@ fn the_sorted_push_orders_children_far_to_near() {
         });
         let dist = Lanes([Vec4::from_slice(&d[..4]), Vec4::from_slice(&d[4..])]);
         let run = |avx: bool| {
-            let mut stack = [(0u32, 0f32); SHALLOW];
+            let mut stack = [const { Slot::new((0u32, 0f32)) }; SHALLOW];
             let mut sp = 5;
             #[cfg(target_arch = "x86_64")]
             let near = if avx {
@@ -336,7 +336,9 @@ fn the_sorted_push_orders_children_far_to_near() {
             };
             #[cfg(not(target_arch = "x86_64"))]
             let near = order::<_, _, true>(Portable, &tree, &node, mask, dist, &mut stack, &mut sp);
-            (near, stack[5..sp].to_vec())
+            // SAFETY: every slot was written at its creation.
+            let pushed = stack[5..sp].iter().map(|s| unsafe { s.assume_init() });
+            (near, pushed.collect::<Vec<_>>())
         };
         let (near, pushed) = run(false);
         let k = mask.count_ones() as usize;
