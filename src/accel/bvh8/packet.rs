@@ -21,7 +21,8 @@
 use super::lanes::{Lanes, W};
 use super::node::{is_leaf, Node, EMPTY, NO_ITEM};
 use super::traverse::{
-    self, insert_far_first, BoxTest, Closest, Fallback, LeafRay, Nearest, RayData, Tree, ANY_OCTANT,
+    self, insert_far_first, BoxTest, Closest, Fallback, LeafRay, Nearest, RayData, Slot, Tree,
+    ANY_OCTANT,
 };
 #[cfg(target_arch = "x86_64")]
 use super::traverse::{triangle_lanes, Avx};
@@ -497,7 +498,8 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
     let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
     #[cfg(target_arch = "x86_64")]
     let mut leaf8 = None;
-    let mut stack = [(0u32, 0u32, 0f32); N];
+    // Not zeroed (see `traverse::Slot`).
+    let mut stack = [const { Slot::<(u32, u32, f32)>::uninit() }; N];
     let mut sp = 0usize;
     let (mut cur, mut active) = (0u32, walked);
     while active != 0 {
@@ -524,7 +526,7 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
             }
             if k > 0 {
                 for &e in &kids[..k - 1] {
-                    stack[sp] = e;
+                    stack[sp].write(e);
                     sp += 1;
                 }
                 (cur, active) = (kids[k - 1].0, kids[k - 1].1);
@@ -551,7 +553,8 @@ fn closest_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N:
         let tmax = near.tmax();
         while sp > 0 {
             sp -= 1;
-            let (c, m, d) = stack[sp];
+            // SAFETY: below the stack pointer (see `traverse::Slot`).
+            let (c, m, d) = unsafe { stack[sp].assume_init() };
             let keep = Lanes::splat(d).le_mask(tmax) & m;
             if keep != 0 {
                 (cur, active) = (c, keep);
@@ -585,7 +588,8 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
     let mut leaf_ray: [Option<LeafRay>; PACKET] = Default::default();
     #[cfg(target_arch = "x86_64")]
     let (mut leaf8, tmax8) = (None, F8(tmax.to_array()));
-    let mut stack = [(0u32, 0u32); N];
+    // Not zeroed (see `traverse::Slot`).
+    let mut stack = [const { Slot::<(u32, u32)>::uninit() }; N];
     let mut sp = 0usize;
     let mut hit = 0u32;
     // Rays still looking for a hit, and those in the current subtree.
@@ -613,7 +617,7 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
                 if next.is_none() {
                     next = Some((node.child[i], m));
                 } else {
-                    stack[sp] = (node.child[i], m);
+                    stack[sp].write((node.child[i], m));
                     sp += 1;
                 }
             }
@@ -648,7 +652,8 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
         active = 0;
         while sp > 0 && open != 0 {
             sp -= 1;
-            let (c, m) = stack[sp];
+            // SAFETY: below the stack pointer (see `traverse::Slot`).
+            let (c, m) = unsafe { stack[sp].assume_init() };
             if m & open != 0 {
                 (cur, active) = (c, m & open);
                 break;

@@ -190,8 +190,8 @@ pub(crate) struct RayData {
 /// eight slots from the pointer and moves it by fewer); every read is of a
 /// slot below the pointer, after a decrement, so it was written by a push
 /// and nothing has written it since but another push. That is the proof
-/// each `assume_init` points to.
-type Slot<T> = std::mem::MaybeUninit<T>;
+/// each `assume_init` points to, here and in the packet walks.
+pub(crate) type Slot<T> = std::mem::MaybeUninit<T>;
 
 /// The octant parameter of [`closest`] and [`any`] that reads the ray's
 /// planes from [`RayData`] at run time (`0..8` fixes them at compile time).
