@@ -754,7 +754,7 @@ fn nearest_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
                 }
             }
         }
-        if b.has_other() {
+        if !F::TRIANGLES_ONLY && b.has_other() {
             let mut todo = active;
             while todo != 0 {
                 let r = todo.trailing_zeros() as usize;
@@ -823,7 +823,7 @@ fn blocked_in_leaf8<S: TraversalStats, F: Fallback + ?Sized>(
                 }
             }
         }
-        if b.has_other() {
+        if !F::TRIANGLES_ONLY && b.has_other() {
             let mut todo = open;
             while todo != 0 {
                 let r = todo.trailing_zeros() as usize;

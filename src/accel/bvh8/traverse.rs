@@ -22,6 +22,11 @@ pub(crate) const SHALLOW_DEPTH: usize = (SHALLOW - 1) / (W - 1);
 /// How items that are not triangles are tested (the world's spheres and
 /// transformed shapes); a mesh has none.
 pub trait Fallback {
+    /// Whether the tree holds triangles only (then a leaf block's ids are
+    /// never looked through for other items: a mesh's walk skips that
+    /// check at compile time).
+    const TRIANGLES_ONLY: bool = false;
+
     /// The hit parameter of item `id` in `(tmin, tmax)`.
     fn intersect(&self, id: u32, ray: &Ray, tmin: f32, tmax: f32) -> Option<f32>;
 }
@@ -30,6 +35,8 @@ pub trait Fallback {
 pub struct TrianglesOnly;
 
 impl Fallback for TrianglesOnly {
+    const TRIANGLES_ONLY: bool = true;
+
     #[inline]
     fn intersect(&self, _: u32, _: &Ray, _: f32, _: f32) -> Option<f32> {
         None
@@ -122,7 +129,7 @@ impl<'a, F: Fallback + ?Sized> Tree<'a, F> {
                 mask &= mask - 1;
                 near.offer(t[i], b.ids[i], Some([bary[0][i], bary[1][i], bary[2][i]]));
             }
-            if b.has_other() {
+            if !F::TRIANGLES_ONLY && b.has_other() {
                 for id in b.others() {
                     if let Some(t) = self.fallback.intersect(id, lr.ray, tmin, near.test_tmax()) {
                         near.offer(t, id, None);
@@ -151,7 +158,8 @@ impl<'a, F: Fallback + ?Sized> Tree<'a, F> {
                 tests += b.items();
             }
             if lr.triangles(bt, b, tmin, tmax, skip).0 != 0
-                || (b.has_other()
+                || (!F::TRIANGLES_ONLY
+                    && b.has_other()
                     && b.others()
                         .any(|id| self.fallback.intersect(id, lr.ray, tmin, tmax).is_some()))
             {
