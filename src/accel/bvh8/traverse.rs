@@ -503,7 +503,12 @@ impl<'r> LeafRay<'r> {
         skip: u32,
     ) -> (u32, [f32; 4], [[f32; 4]; 3]) {
         let rs = RaySpace4::new(&self.w4, &b.v);
-        let mut todo = rs.may_hit() & triangle_lanes(b) & !lanes_of(b, skip);
+        let mut todo = rs.may_hit() & triangle_lanes(b);
+        // `NO_ITEM` lanes are not triangle lanes: nothing more to drop (and
+        // where `skip` is that constant, no compare is compiled).
+        if skip != NO_ITEM {
+            todo &= !lanes_of(b, skip);
+        }
         // Arrays, not a `Vec4`: a `Vec4` indexed by a run-time lane compiles
         // to a jump table.
         let mut t = [0.0; 4];
