@@ -693,25 +693,41 @@ fn twenty_clients_get_their_images() {
     assert!(most <= cores + 12, "{most} threads for 20 clients");
 }
 
+/// Sends `GET path` from another thread, and returns once session
+/// `session` exists on the server (its render begun) and, with
+/// `pass_started`, its pass has counted its pixels.
+fn render_in_background(
+    s: &Server,
+    path: &str,
+    session: &str,
+    pass_started: bool,
+) -> std::thread::JoinHandle<Reply> {
+    let (addr, path) = (s.addr.clone(), path.to_string());
+    let handle = std::thread::spawn(move || {
+        request(
+            &addr,
+            &format!("GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"),
+        )
+    });
+    let progress = format!("/api/progress?session={session}");
+    let t = Instant::now();
+    while s.get(&progress).status != 200 || (pass_started && s.json(&progress)["pass_total"] == 0) {
+        no_hang(t, "the background render never started");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    handle
+}
+
 /// A new request of a session cancels the render it had running.
 #[test]
 fn a_new_request_cancels_the_session_render() {
     let s = Server::glint(&common::own_scene("mesh_knot_16k.txt"), &[]);
-    let addr = s.addr.clone();
-    let slow = std::thread::spawn(move || {
-        request(
-            &addr,
-            "GET /api/render?session=one&w=2048&h=2048&accel=none&spp=1&pass=0 HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n",
-        )
-    });
-    // Wait until the slow render is under way.
-    let t = Instant::now();
-    while s.get("/api/progress?session=one").status != 200
-        || s.json("/api/progress?session=one")["pass_total"] == 0
-    {
-        no_hang(t, "the slow render never started");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let slow = render_in_background(
+        &s,
+        "/api/render?session=one&w=2048&h=2048&accel=none&spp=1&pass=0",
+        "one",
+        true,
+    );
     let t = Instant::now();
     let fast = s.get("/api/render?session=one&w=8&h=8&spp=1&pass=0");
     assert_eq!(fast.png().dimensions(), (8, 8));
@@ -727,18 +743,12 @@ fn a_new_request_cancels_the_session_render() {
 #[test]
 fn a_late_older_request_cancels_nothing() {
     let s = Server::glint(&common::own_scene("mesh_knot_16k.txt"), &[]);
-    let addr = s.addr.clone();
-    let newer = std::thread::spawn(move || {
-        request(
-            &addr,
-            "GET /api/render?session=two&w=1024&h=1024&spp=4&seq=5&pass=0 HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n",
-        )
-    });
-    let t = Instant::now();
-    while s.get("/api/progress?session=two").status != 200 {
-        no_hang(t, "the newer render never started");
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    let newer = render_in_background(
+        &s,
+        "/api/render?session=two&w=1024&h=1024&spp=4&seq=5&pass=0",
+        "two",
+        false,
+    );
     let older = s.get("/api/render?session=two&w=8&h=8&spp=1&seq=4&pass=0");
     assert_eq!(older.status, 409, "{}", older.text());
     assert!(older.text().contains("superseded"));
