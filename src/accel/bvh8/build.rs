@@ -568,6 +568,13 @@ fn forced(r: &Range, depth: usize) -> Option<Option<Plan>> {
 }
 
 impl Plan {
+    /// The axis the plan divides on.
+    fn axis(self) -> u8 {
+        match self {
+            Plan::Bin { axis, .. } | Plan::Median { axis } => axis,
+        }
+    }
+
     /// Whether the plan makes a small range an 8-wide node rather than a leaf.
     fn wide(self) -> bool {
         matches!(self, Plan::Bin { wide: true, .. })
@@ -614,6 +621,11 @@ impl Part {
             ..Part::new(r, plan, depth)
         }
     }
+}
+
+/// [`Node::split`] of a node divided by `plan`.
+fn split_bit(plan: Option<Plan>) -> u8 {
+    plan.map_or(0, |p| 1 << p.axis())
 }
 
 /// The child the node loop divides next: the largest by surface area of
@@ -1051,11 +1063,15 @@ impl Builder {
             lay_out(&laid, out);
             return at as u32;
         }
+        let split = split_bit(part.plan);
         let (kids, len) = self.children(refs, part, depth, 1);
         let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
         let at = out.len();
         out.push(Node::EMPTY);
-        let mut node = Node::EMPTY;
+        let mut node = Node {
+            split,
+            ..Node::EMPTY
+        };
         for (i, k) in kids.enumerate() {
             let kr = k.r;
             let sub = refs_of(refs, &r, &kr);
@@ -1117,6 +1133,7 @@ impl Builder {
         tasks: usize,
     ) -> Laid {
         let r = part.r;
+        let split = split_bit(part.plan);
         self.expand(refs, &mut part, depth + 1, SPECULATE_LEVELS, tasks);
         let (kids, len) = self.children(refs, part, depth, tasks);
         let kids = kids.into_iter().take(len).map(|k| k.expect("filled"));
@@ -1150,7 +1167,10 @@ impl Builder {
             })
             .collect();
         // The children's nodes follow the node, one child's after another.
-        let mut node = Node::EMPTY;
+        let mut node = Node {
+            split,
+            ..Node::EMPTY
+        };
         let mut at = 1;
         for (i, (c, k, laid)) in subs.iter().enumerate() {
             let c = if is_leaf(*c) { *c } else { c + at as u32 };

@@ -59,6 +59,12 @@ pub(crate) struct Node {
     pub planes: [Lanes; 6],
     /// Children: node indices or leaf references.
     pub child: [ChildRef; W],
+    /// `1 << axis` of the axis the node's range was first divided on: its
+    /// children's slots run from that division's lower side to its upper
+    /// side (0 where unknown). An any-hit walk enters the far side first
+    /// (see `traverse::any`). In the line of `child`, which the step reads
+    /// anyway, and in the padding: the node is no larger.
+    pub split: u8,
 }
 
 impl Node {
@@ -73,6 +79,7 @@ impl Node {
             Lanes::NEG_INFINITY,
         ],
         child: [EMPTY; W],
+        split: 0,
     };
 
     /// Sets slot `i` to `r` with the box `[lo, hi]`.

@@ -600,10 +600,18 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
         if !is_leaf(cur) {
             let node = tree.node::<S>(cur, &mut n_nodes);
             let (mut mask, _) = f.boxes(bt, node, tmax_hi);
+            // The far side of the node's first division first, as
+            // `traverse::any` goes (`shadow8`: 1.01x on bunny40k, 1.10x
+            // on the spheres; mirrored, 1.03x and 1.00x).
+            let upward = f.octant & usize::from(node.split) == 0;
             let mut next = None;
             while mask != 0 {
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
+                let i = if upward {
+                    31 - mask.leading_zeros()
+                } else {
+                    mask.trailing_zeros()
+                } as usize;
+                mask &= !(1 << i);
                 // Each ray's own test for inner children too: shadow
                 // rays from eight surface points make loose packet
                 // bounds, and the rays a child keeps prune its subtree

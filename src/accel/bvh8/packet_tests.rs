@@ -450,3 +450,39 @@ fn the_packet_inverse_is_the_single_rays() {
         }
     }
 }
+
+/// The packet any-hit walk enters the far side of a node's first
+/// division first, as the single walk does
+/// (`any_enters_the_far_side_of_the_first_division_first`): eight
+/// parallel rays towards −x above y = 0 test one leaf each where the
+/// node's first division is on x, and both where it is on y (the upper,
+/// near, slot first).
+#[test]
+fn packets_enter_the_far_side_of_the_first_division_first() {
+    use crate::accel::bvh8::traverse::tests::two_leaves;
+    use crate::accel::bvh8::traverse::{Portable, TrianglesOnly, SHALLOW};
+    let rays: Vec<PacketRay> = (0..PACKET)
+        .map(|k| {
+            let o = Vec3::new(4.0, 1.5 + 0.1 * k as f32, -1.0 + 0.25 * k as f32);
+            pr(
+                crate::math::Ray::new(o, Vec3::new(-1.0, 0.0, 0.0)),
+                0.0,
+                f32::INFINITY,
+            )
+        })
+        .collect();
+    let walk = |split: u8| {
+        let (nodes, tris) = two_leaves(split);
+        let tree = &Tree {
+            nodes: &nodes,
+            tris: &tris,
+            fallback: &TrianglesOnly,
+            deep: false,
+        };
+        let mut c = Counters::default();
+        let hit = any::<_, _, _, SHALLOW>(Portable, tree, &rays, &[], &mut c);
+        (c.intersection_tests, hit)
+    };
+    assert_eq!(walk(1), (8, 0xff));
+    assert_eq!(walk(2), (16, 0xff));
+}

@@ -186,7 +186,7 @@ fn the_parallel_build_equals_the_serial_one() {
     assert_eq!(one.nodes.len(), four.nodes.len());
     assert!(one.nodes.len() > 1000);
     for (a, b) in one.nodes.iter().zip(&four.nodes) {
-        assert_eq!(a.child, b.child);
+        assert_eq!((a.child, a.split), (b.child, b.split));
         assert_eq!(format!("{:?}", a.planes), format!("{:?}", b.planes));
     }
     assert_eq!(format!("{:?}", one.tris), format!("{:?}", four.tris));
@@ -228,10 +228,59 @@ fn a_mesh_built_on_two_threads_equals_the_serial_one() {
     assert_eq!(one.nodes.len(), two.nodes.len());
     assert!(one.nodes.len() > 5_000, "{}", one.nodes.len());
     for (a, b) in one.nodes.iter().zip(&two.nodes) {
-        assert_eq!(a.child, b.child);
+        assert_eq!((a.child, a.split), (b.child, b.split));
         assert_eq!(format!("{:?}", a.planes), format!("{:?}", b.planes));
     }
     assert_eq!(format!("{:?}", one.tris), format!("{:?}", two.tris));
+}
+
+/// Each node's slots run from the lower to the upper side of its first
+/// division, whose axis `Node::split` names (what the any-hit walk's
+/// order relies on): on a lattice of small triangles, 24 by 12 by 6 of
+/// them (so nodes divide on every axis), the children's centres along
+/// that axis split into a lower run of slots and an upper one. A wrong
+/// axis, or slots out of order, puts centres of both runs on both sides.
+#[test]
+fn slots_run_along_the_first_division() {
+    let (nx, ny, nz) = (24, 12, 6);
+    let mut vertices = Vec::new();
+    for i in 0..nx * ny * nz {
+        let c = Vec3::new(
+            (i % nx) as f32,
+            (i / nx % ny) as f32,
+            (i / (nx * ny)) as f32,
+        );
+        vertices.extend([
+            c,
+            c + Vec3::new(0.1, 0.0, 0.0),
+            c + Vec3::new(0.0, 0.1, 0.1),
+        ]);
+    }
+    let indices: Vec<[u32; 3]> = (0..nx * ny * nz)
+        .map(|i| [0, 1, 2].map(|k| (3 * i + k) as u32))
+        .collect();
+    let b = Bvh8::from_mesh(&vertices, &indices);
+    let mut axes = [0; 3];
+    for n in &b.nodes {
+        let len = n.child.iter().take_while(|&&c| c != node::EMPTY).count();
+        if len < 2 {
+            continue;
+        }
+        assert_eq!(n.split.count_ones(), 1, "{:#b}", n.split);
+        let a = n.split.trailing_zeros() as usize;
+        assert!(a < 3);
+        axes[a] += 1;
+        let centre = |i: usize| 0.5 * (n.planes[a][i] + n.planes[a + 3][i]);
+        let parted = (1..len).any(|k| {
+            let low = (0..k).map(centre).fold(f32::MIN, f32::max);
+            let high = (k..len).map(centre).fold(f32::MAX, f32::min);
+            low < high
+        });
+        assert!(parted, "{:?}", (0..len).map(centre).collect::<Vec<_>>());
+    }
+    // Measured: nodes first divided on each axis.
+    assert!(axes.iter().all(|&n| n >= 3), "{axes:?}");
+    eprintln!("nodes first divided on x, y, z: {axes:?}");
 }
 
 /// Every item sits in exactly one lane of one block, and each leaf's

@@ -1002,8 +1002,8 @@ pub(crate) fn any<
         // Down to a leaf in a loop of its own (see `closest`).
         while !is_leaf(cur) {
             let node = tree.node::<S>(cur, &mut n_nodes);
-            // No ordering: any occluder ends the walk, and sorting costs
-            // more than it saves for shadow rays.
+            // No sort by distance: any occluder ends the walk, and
+            // sorting costs more than it saves for shadow rays.
             let (mut mask, _) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
             if mask == 0 {
                 if sp == 0 {
@@ -1014,8 +1014,23 @@ pub(crate) fn any<
                 cur = unsafe { stack[sp].assume_init() };
                 continue;
             }
-            cur = node.child[mask.trailing_zeros() as usize];
-            mask &= mask - 1;
+            // The far side of the node's first division first: its upper
+            // slot where the ray runs towards +axis, else its lower one
+            // (`Node::split`). A shadow ray leaving a surface skims the
+            // boxes around its origin, and what blocks it lies further
+            // on. On the anchors' shadow rays (`examples/packet_rays`,
+            // `shadow1`) 1.05x on bunny40k and 1.14-1.17x on the spheres
+            // against the lowest slot first; with the meshes and rays
+            // mirrored through the origin 1.02x and 1.01x (the lowest slot
+            // was the far side there already): the upper slot first
+            // regardless of direction was 0.91x there.
+            let first = if rd.octant() & usize::from(node.split) != 0 {
+                mask.trailing_zeros()
+            } else {
+                31 - mask.leading_zeros()
+            };
+            cur = node.child[first as usize];
+            mask &= !(1 << first);
             if mask != 0 {
                 // Several children: start loading them all, pushing the
                 // others in the same pass.
@@ -1050,4 +1065,4 @@ pub(crate) fn any<
 
 #[cfg(test)]
 #[path = "traverse_tests.rs"]
-mod tests;
+pub(super) mod tests;

@@ -7,9 +7,9 @@ use crate::stats::NoStats;
 
 /// The worst case for the stack: a chain of `MAX_DEPTH` inner nodes,
 /// each with seven leaves beside the next node, and a ray through every
-/// box, the next node's nearest (and in slot 0, which `any` follows
-/// first). Every leaf is an empty block but the last, one triangle at
-/// x = 4.
+/// box, the next node's nearest (and in the last slot, which `any`
+/// follows first in a node of unknown division). Every leaf is an empty
+/// block but the last, one triangle at x = 4.
 fn caterpillar() -> (Vec<Node>, Vec<Tri4>) {
     let mut tri = Tri4::EMPTY;
     let v = [[4.0, -1.0, -1.0], [4.0, 2.0, -1.0], [4.0, -1.0, 2.0]];
@@ -28,8 +28,8 @@ fn caterpillar() -> (Vec<Node>, Vec<Tri4>) {
             } else {
                 leaf(1, 1)
             };
-            n.set(0, next, Vec3::splat(-5.0), Vec3::splat(5.0));
-            for s in 1..W {
+            n.set(W - 1, next, Vec3::splat(-5.0), Vec3::splat(5.0));
+            for s in 0..W - 1 {
                 n.set(s, leaf(0, 1), Vec3::new(0.0, -5.0, -5.0), Vec3::splat(5.0));
             }
             n
@@ -365,4 +365,79 @@ fn the_sorted_push_orders_children_far_to_near() {
             assert_eq!(run(true), (near, pushed));
         }
     }
+}
+
+/// One node with two leaves side by side along x, its first division
+/// `split` (`Node::split`): slot 0's box x in [0, 1] with a triangle in
+/// the plane x = 0.5 above y = 0, slot 1's box x in [2, 3] with one in
+/// x = 2.5 below it, both boxes across y and z in [-5, 5].
+pub(in crate::accel::bvh8) fn two_leaves(split: u8) -> (Vec<Node>, Vec<Tri4>) {
+    // A triangle in the plane x = `x`, covering y from `y0` to `y1` (of
+    // the same sign) and z in [-4, 4].
+    let block = |x: f32, y0: f32, y1: f32, id: u32| {
+        let mut b = Tri4::EMPTY;
+        let v = [[x, y0, -4.0], [x, y1, -4.0], [x, 0.5 * (y0 + y1), 4.0]];
+        for (k, vk) in v.iter().enumerate() {
+            for (a, &c) in vk.iter().enumerate() {
+                b.v[k][a].x = c;
+            }
+        }
+        b.ids[0] = id;
+        b
+    };
+    let mut n = Node {
+        split,
+        ..Node::EMPTY
+    };
+    n.set(
+        0,
+        leaf(0, 1),
+        Vec3::new(0.0, -5.0, -5.0),
+        Vec3::new(1.0, 5.0, 5.0),
+    );
+    n.set(
+        1,
+        leaf(1, 1),
+        Vec3::new(2.0, -5.0, -5.0),
+        Vec3::new(3.0, 5.0, 5.0),
+    );
+    (
+        vec![n],
+        vec![block(0.5, 0.5, 4.0, 0), block(2.5, -4.0, -0.5, 1)],
+    )
+}
+
+/// The any-hit walk enters the far side of a node's first division
+/// first (`Node::split`), on [`two_leaves`] with two rays through both
+/// boxes: one running towards +x below y = 0 (blocked by slot 1's
+/// triangle only) and one towards −x above it (blocked by slot 0's
+/// only). Far side first, each ray tests one leaf; near side first, it
+/// would test both. A node divided on an axis a ray does not run towards
+/// −(its octant bit clear), or whose division is unknown (`split` 0),
+/// has its upper slot entered first.
+#[test]
+fn any_enters_the_far_side_of_the_first_division_first() {
+    let up = Ray::new(Vec3::new(-1.0, -2.0, 0.0), Vec3::X);
+    let down = Ray::new(Vec3::new(4.0, 2.0, 0.0), Vec3::new(-1.0, 0.0, 0.0));
+    // (triangles tested, blocked) of `any` on the node.
+    let walk = |split: u8, ray: &Ray| {
+        let (nodes, tris) = two_leaves(split);
+        let tree = &Tree {
+            nodes: &nodes,
+            tris: &tris,
+            fallback: &TrianglesOnly,
+            deep: false,
+        };
+        let mut c = crate::stats::Counters::default();
+        let range = (0.0, f32::INFINITY);
+        let rd = &RayData::new(ray);
+        let hit =
+            any::<_, _, _, SHALLOW, ANY_OCTANT, true>(Portable, tree, rd, range, NO_ITEM, &mut c);
+        (c.intersection_tests, hit)
+    };
+    assert_eq!(walk(1, &up), (1, true));
+    assert_eq!(walk(1, &down), (1, true));
+    assert_eq!(walk(2, &up), (1, true));
+    assert_eq!(walk(2, &down), (2, true));
+    assert_eq!(walk(0, &down), (2, true));
 }
