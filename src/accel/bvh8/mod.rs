@@ -10,7 +10,8 @@
 //!   children built in parallel above 4k items, a branch-free partition
 //!   for unordered ranges, leaves filled last.
 //! - `traverse.rs`: per-ray constants (inverse direction, octant, shear),
-//!   nearest-child-first closest hit, unordered any hit with early exit.
+//!   nearest-child-first closest hit, any hit from the far side of each
+//!   node's first division (`Node::split`) with early exit.
 //! - `packet.rs`: up to eight rays walked together (one box test per node
 //!   for the packet), each with the hit its own walk finds, bit for bit.
 //! - `dispatch.rs`: the traversal compiled for SSE2 and for AVX2 with FMA, picked at
