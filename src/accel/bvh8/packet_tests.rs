@@ -459,8 +459,8 @@ fn the_packet_inverse_is_the_single_rays() {
 /// near, slot first).
 #[test]
 fn packets_enter_the_far_side_of_the_first_division_first() {
-    use crate::accel::bvh8::traverse::tests::two_leaves;
-    use crate::accel::bvh8::traverse::{Portable, TrianglesOnly, SHALLOW};
+    use crate::accel::bvh8::traverse::tests::on_two_leaves;
+    use crate::accel::bvh8::traverse::{Portable, SHALLOW};
     let rays: Vec<PacketRay> = (0..PACKET)
         .map(|k| {
             let o = Vec3::new(4.0, 1.5 + 0.1 * k as f32, -1.0 + 0.25 * k as f32);
@@ -472,16 +472,11 @@ fn packets_enter_the_far_side_of_the_first_division_first() {
         })
         .collect();
     let walk = |split: u8| {
-        let (nodes, tris) = two_leaves(split);
-        let tree = &Tree {
-            nodes: &nodes,
-            tris: &tris,
-            fallback: &TrianglesOnly,
-            deep: false,
-        };
-        let mut c = Counters::default();
-        let hit = any::<_, _, _, SHALLOW>(Portable, tree, &rays, &[], &mut c);
-        (c.intersection_tests, hit)
+        on_two_leaves(split, |tree| {
+            let mut c = Counters::default();
+            let hit = any::<_, _, _, SHALLOW>(Portable, tree, &rays, &[], &mut c);
+            (c.intersection_tests, hit)
+        })
     };
     assert_eq!(walk(1), (8, 0xff));
     assert_eq!(walk(2), (16, 0xff));

@@ -371,7 +371,11 @@ fn the_sorted_push_orders_children_far_to_near() {
 /// `split` (`Node::split`): slot 0's box x in [0, 1] with a triangle in
 /// the plane x = 0.5 above y = 0, slot 1's box x in [2, 3] with one in
 /// x = 2.5 below it, both boxes across y and z in [-5, 5].
-pub(in crate::accel::bvh8) fn two_leaves(split: u8) -> (Vec<Node>, Vec<Tri4>) {
+/// Calls `walk` with the tree of that node.
+pub(in crate::accel::bvh8) fn on_two_leaves<R>(
+    split: u8,
+    walk: impl FnOnce(&Tree<TrianglesOnly>) -> R,
+) -> R {
     // A triangle in the plane x = `x`, covering y from `y0` to `y1` (of
     // the same sign) and z in [-4, 4].
     let block = |x: f32, y0: f32, y1: f32, id: u32| {
@@ -401,17 +405,20 @@ pub(in crate::accel::bvh8) fn two_leaves(split: u8) -> (Vec<Node>, Vec<Tri4>) {
         Vec3::new(2.0, -5.0, -5.0),
         Vec3::new(3.0, 5.0, 5.0),
     );
-    (
-        vec![n],
-        vec![block(0.5, 0.5, 4.0, 0), block(2.5, -4.0, -0.5, 1)],
-    )
+    let tris = [block(0.5, 0.5, 4.0, 0), block(2.5, -4.0, -0.5, 1)];
+    walk(&Tree {
+        nodes: &[n],
+        tris: &tris,
+        fallback: &TrianglesOnly,
+        deep: false,
+    })
 }
 
 /// The any-hit walk enters the far side of a node's first division
-/// first (`Node::split`), on [`two_leaves`] with two rays through both
-/// boxes: one running towards +x below y = 0 (blocked by slot 1's
-/// triangle only) and one towards −x above it (blocked by slot 0's
-/// only). Far side first, each ray tests one leaf; near side first, it
+/// first (`Node::split`), on the node of [`on_two_leaves`] with two rays
+/// through both boxes: one running towards +x below y = 0 (blocked by
+/// slot 1's triangle only) and one towards −x above it (blocked by slot
+/// 0's only). Far side first, each ray tests one leaf; near side first, it
 /// would test both. A node divided on an axis a ray does not run towards
 /// −(its octant bit clear), or whose division is unknown (`split` 0),
 /// has its upper slot entered first.
@@ -421,19 +428,15 @@ fn any_enters_the_far_side_of_the_first_division_first() {
     let down = Ray::new(Vec3::new(4.0, 2.0, 0.0), Vec3::new(-1.0, 0.0, 0.0));
     // (triangles tested, blocked) of `any` on the node.
     let walk = |split: u8, ray: &Ray| {
-        let (nodes, tris) = two_leaves(split);
-        let tree = &Tree {
-            nodes: &nodes,
-            tris: &tris,
-            fallback: &TrianglesOnly,
-            deep: false,
-        };
-        let mut c = crate::stats::Counters::default();
-        let range = (0.0, f32::INFINITY);
-        let rd = &RayData::new(ray);
-        let hit =
-            any::<_, _, _, SHALLOW, ANY_OCTANT, true>(Portable, tree, rd, range, NO_ITEM, &mut c);
-        (c.intersection_tests, hit)
+        on_two_leaves(split, |tree| {
+            let mut c = crate::stats::Counters::default();
+            let range = (0.0, f32::INFINITY);
+            let rd = &RayData::new(ray);
+            let hit = any::<_, _, _, SHALLOW, ANY_OCTANT, true>(
+                Portable, tree, rd, range, NO_ITEM, &mut c,
+            );
+            (c.intersection_tests, hit)
+        })
     };
     assert_eq!(walk(1, &up), (1, true));
     assert_eq!(walk(1, &down), (1, true));
