@@ -82,6 +82,20 @@ impl Node {
         split: 0,
     };
 
+    /// The slot of `mask` (not empty) on the far side of the node's first
+    /// division for rays of `octant`: the highest where they run towards
+    /// +axis of [`split`](Self::split) (or the division is unknown), else
+    /// the lowest. The any-hit walks enter it first.
+    #[inline(always)]
+    pub fn far_slot(&self, octant: usize, mask: u32) -> usize {
+        debug_assert!(mask != 0);
+        (if octant & usize::from(self.split) != 0 {
+            mask.trailing_zeros()
+        } else {
+            31 - mask.leading_zeros()
+        }) as usize
+    }
+
     /// Sets slot `i` to `r` with the box `[lo, hi]`.
     pub fn set(&mut self, i: usize, r: ChildRef, lo: glam::Vec3, hi: glam::Vec3) {
         for a in 0..3 {

@@ -603,14 +603,9 @@ fn any_frustum<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const N: usi
             // The far side of the node's first division first, as
             // `traverse::any` goes (`shadow8`: 1.01x on bunny40k, 1.10x
             // on the spheres; mirrored, 1.03x and 1.00x).
-            let upward = f.octant & usize::from(node.split) == 0;
             let mut next = None;
             while mask != 0 {
-                let i = if upward {
-                    31 - mask.leading_zeros()
-                } else {
-                    mask.trailing_zeros()
-                } as usize;
+                let i = node.far_slot(f.octant, mask);
                 mask &= !(1 << i);
                 // Each ray's own test for inner children too: shadow
                 // rays from eight surface points make loose packet

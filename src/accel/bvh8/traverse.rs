@@ -1024,12 +1024,8 @@ pub(crate) fn any<
             // mirrored through the origin 1.02x and 1.01x (the lowest slot
             // was the far side there already): the upper slot first
             // regardless of direction was 0.91x there.
-            let first = if rd.octant() & usize::from(node.split) != 0 {
-                mask.trailing_zeros()
-            } else {
-                31 - mask.leading_zeros()
-            };
-            cur = node.child[first as usize];
+            let first = node.far_slot(rd.octant(), mask);
+            cur = node.child[first];
             mask &= !(1 << first);
             if mask != 0 {
                 // Several children: start loading them all, pushing the
