@@ -52,12 +52,16 @@ pub(crate) trait Source: Sync {
 /// Bins per axis of the SAH sweep.
 const BINS: usize = 32;
 /// Cost of a binary split step relative to testing one block of four items.
-/// On the 8-wide tree 0.3, 0.5, 0.8 and 1.2 once measured the same within
-/// noise; with the host's memory slower, 1.0 with leaves of up
-/// to 16 items gave incoherent rays 5-14% more (fewer node levels, each a
-/// cache miss on a large mesh), primary and shadow rays the same, and 8-13%
-/// fewer bytes per triangle.
-const SPLIT_COST: f32 = 1.0;
+/// Since a node's free slots split its larger leaves (see
+/// [`Builder::plan_and_split`]), a larger leaf costs a ray fewer blocks than
+/// the SAH counts, and fewer node levels pay on meshes larger than the
+/// cache (each level a dependent load). Measured against 1.0
+/// (`examples/packet_rays`, the anchors' rays, 1 thread, medians of three
+/// alternated runs): 1.5 gave incoherent rays 1.03x on bunny40k, 1.10x on
+/// sphere1m and 1.12x on sphere4m, camera and shadow rays 0.995-1.03x;
+/// 2.0 more on sphere1m's incoherent rays (1.17x) but bunny40k's shadow
+/// rays 0.97x.
+const SPLIT_COST: f32 = 1.5;
 /// Below this many items a node's subtrees are built on one thread. 4k
 /// rather than 16k: bunny40k's 2-thread build 5.7-6.1 ms instead of
 /// 6.4-6.8 (the top node's eight children, about 5k items each but
