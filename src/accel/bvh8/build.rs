@@ -60,8 +60,15 @@ const BINS: usize = 32;
 /// alternated runs): 1.5 gave incoherent rays 1.03x on bunny40k, 1.10x on
 /// sphere1m and 1.12x on sphere4m, camera and shadow rays 0.995-1.03x;
 /// 2.0 more on sphere1m's incoherent rays (1.17x) but bunny40k's shadow
-/// rays 0.97x.
+/// rays 0.97x. Builds of up to [`WIDE_ITEMS`] items (scenes: a room, rows
+/// of spheres) keep [`SMALL_SPLIT_COST`].
 const SPLIT_COST: f32 = 1.5;
+/// [`SPLIT_COST`] of builds of up to [`WIDE_ITEMS`] items. Their items are
+/// often not triangles (spheres, planes), each tested alone however the
+/// SAH groups them in blocks of four, and their trees fit in the cache:
+/// 1.5 made the depth-of-field scene of `scenes/` (a few spheres on a
+/// plane) render in 1.19x the time of 1.0.
+const SMALL_SPLIT_COST: f32 = 1.0;
 /// Below this many items a node's subtrees are built on one thread. 4k
 /// rather than 16k: bunny40k's 2-thread build 5.7-6.1 ms instead of
 /// 6.4-6.8 (the top node's eight children, about 5k items each but
@@ -693,6 +700,17 @@ struct Builder {
 }
 
 impl Builder {
+    /// The SAH's cost of a binary division relative to a block's test:
+    /// [`SPLIT_COST`], or [`SMALL_SPLIT_COST`] in builds of up to
+    /// [`WIDE_ITEMS`] items.
+    fn split_cost(&self) -> f32 {
+        if self.wide {
+            SMALL_SPLIT_COST
+        } else {
+            SPLIT_COST
+        }
+    }
+
     /// How to divide `r`, or `None` for a leaf.
     /// `items` are the range's references; `depth` is the node level the
     /// range's node would sit at.
@@ -702,8 +720,8 @@ impl Builder {
 
     /// [`plan`](Self::plan), and how the node loop may divide `r` as a
     /// child within its parent node ([`Part::split`]): by the plan, or,
-    /// for a leaf of more than four items, by its cheapest plane all the
-    /// same. A node's eight boxes cost one test whatever they hold, so a
+    /// in a build of more than [`WIDE_ITEMS`] items, for a leaf of more
+    /// than four items, by its cheapest plane all the same. A node's eight boxes cost one test whatever they hold, so a
     /// slot the SAH's divisions leave free is better spent on splitting a
     /// leaf: a ray then tests only the blocks whose boxes it meets. The
     /// node loop gives such slots out only after the SAH's divisions (see
@@ -728,7 +746,7 @@ impl Builder {
             sweep(&large_bins(items, &r.cbounds), n, ce)
         };
         let whole = r.bounds.surface_area();
-        let split = SPLIT_COST * whole + best.0;
+        let split = self.split_cost() * whole + best.0;
         let bin = |wide| Plan::Bin {
             axis: best.1 as u8,
             pos: best.2 as u8,
@@ -746,8 +764,12 @@ impl Builder {
             if wide {
                 return (Some(bin(true)), Some(bin(true)));
             }
-            // (`forced` made ranges of four items or fewer leaves.)
-            return (None, best.0.is_finite().then(|| bin(false)));
+            // (`forced` made ranges of four items or fewer leaves.) Not
+            // in builds of up to `WIDE_ITEMS` items, which weigh wide
+            // nodes instead: there the depth-of-field scene of `scenes/`
+            // (a few spheres on a plane) rendered in 1.05-1.09x the time.
+            let fill = !self.wide && best.0.is_finite();
+            return (None, fill.then(|| bin(false)));
         }
         let plan = if best.0.is_finite() {
             bin(false)
@@ -817,7 +839,7 @@ impl Builder {
 
     /// The SAH cost of making the small range `r` (its items are `items`)
     /// an 8-wide node whose first division is `first`: one node test
-    /// (`SPLIT_COST`, as a binary level is charged) plus its children's
+    /// (the split cost, as a binary level is charged) plus its children's
     /// `area × blocks`, the children being those the node loop makes
     /// (within a wide node: [`Part::split`]), found here on a copy of the
     /// items. The binary SAH charges a node test per binary level; a wide
@@ -853,7 +875,7 @@ impl Builder {
             .iter()
             .map(|(k, _)| k.bounds.surface_area() * blocks(k.len()))
             .sum();
-        SPLIT_COST * r.bounds.surface_area() + leaves
+        self.split_cost() * r.bounds.surface_area() + leaves
     }
 
     /// Divides the copy `buf` of a small range `r` by the bin plan `plan`,

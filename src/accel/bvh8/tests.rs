@@ -133,7 +133,7 @@ fn sah_cost(b: &Bvh8) -> f64 {
 fn build_quality_stays_where_it_was_measured() {
     // (mesh, and its measured SAH cost, nodes and tests a ray pair)
     for (name, prims, cost_max, nodes_max, tests_max) in [
-        ("soup", soup(5, 3000), 33.460, 12.74, 54.80),
+        ("soup", soup(5, 3000), 34.320, 14.04, 51.52),
         ("terrain", terrain(), 8.000, 9.19, 13.74),
     ] {
         let b = Bvh8::new(&prims, all(&prims));
