@@ -721,18 +721,19 @@ impl Builder {
     /// [`plan`](Self::plan), and how the node loop may divide `r` as a
     /// child within its parent node ([`Part::split`]): by the plan, or,
     /// in a build of more than [`WIDE_ITEMS`] items, for a leaf of more
-    /// than four items, by its cheapest plane all the same. A node's eight boxes cost one test whatever they hold, so a
-    /// slot the SAH's divisions leave free is better spent on splitting a
-    /// leaf: a ray then tests only the blocks whose boxes it meets. The
-    /// node loop gives such slots out only after the SAH's divisions (see
+    /// than four items, by its cheapest plane all the same. A node's
+    /// eight boxes cost one test whatever they hold, so a slot the SAH's
+    /// divisions leave free is better spent on splitting a leaf: a ray
+    /// then tests only the blocks whose boxes it meets. The node loop
+    /// gives such slots out only after the SAH's divisions (see
     /// [`Builder::children`]), so the tree's nodes are the ones the SAH
     /// alone makes, and only leaves change. Embree's builder divides every
     /// child of more than four items while its node has slots, largest
-    /// first whether or not the SAH would: on the anchors' rays it tests a
-    /// fifth fewer blocks than glint did for as many nodes (its statistics
-    /// counters, `EMBREE_STAT_COUNTERS`). Measured here (`glint bench rays
-    /// --stats`): 17-25% fewer triangle tests a ray on the anchors' meshes
-    /// for the same nodes, 0.3-0.8% more bytes.
+    /// first whether or not the SAH would: on the anchors' rays it tested
+    /// fewer blocks than glint did for as many nodes (its statistics
+    /// counters, `EMBREE_STAT_COUNTERS`). Measured here with a split cost
+    /// of 1.0 (`glint bench rays --stats`): 17-25% fewer triangle tests a
+    /// ray on the anchors' meshes for the same nodes, 0.3-0.8% more bytes.
     fn plan_and_split(&self, items: &[PrimRef], r: &Range, depth: usize) -> Split {
         if let Some(plan) = forced(r, depth) {
             return (plan, plan);
