@@ -83,17 +83,32 @@ pub struct Query<'a> {
     pub tmin: f32,
     /// Hits lie before this.
     pub tmax: f32,
+    /// A hint, never a change of answer: the ray is one of a run traced
+    /// one after another whose directions mostly keep their signs (a
+    /// tile's camera rays in scan order). `bvh8` then walks it with a copy
+    /// of its closest-hit walk compiled for the ray's octant, which is
+    /// faster for such runs and slower where the octant changes from one
+    /// ray to the next (see `docs/performance.md`). Other aggregates ignore
+    /// it.
+    pub coherent: bool,
 }
 
 impl<'a> Query<'a> {
-    /// `ray` against `prims` in `(tmin, tmax)`.
+    /// `ray` against `prims` in `(tmin, tmax)`, not [`coherent`](Self::coherent).
     pub fn new(prims: &'a [Primitive], ray: &'a Ray, tmin: f32, tmax: f32) -> Self {
         Self {
             prims,
             ray,
             tmin,
             tmax,
+            coherent: false,
         }
+    }
+
+    /// The same query with the [`coherent`](Self::coherent) hint set to
+    /// `coherent`.
+    pub fn with_coherent(self, coherent: bool) -> Self {
+        Self { coherent, ..self }
     }
 
     /// The same query up to `tmax`.
