@@ -2,7 +2,9 @@
 //! and profiles of the packet code:
 //! `cargo run --release --example packet_rays -- MESH.obj PREFIX KIND [PASSES] [EVERY]`
 //! with KIND one of `camera8` (the camera rays as 4x2-pixel packets),
-//! `camera1` (the same rays one at a time), `shadow8` (eight consecutive
+//! `camera1` (the same rays one at a time, with the coherent hint, as
+//! `glint bench rays` traces them), `camera1u` (one at a time without the
+//! hint), `shadow8` (eight consecutive
 //! shadow rays a packet), `shadow1`, `incoherent1` (the incoherent rays one
 //! at a time). Runs PASSES passes (default 3) over
 //! every EVERY-th packet (default 1; a larger one makes a short workload for
@@ -39,7 +41,7 @@ fn read_rays(path: &str) -> Result<Vec<PacketRay>, String> {
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
     let usage =
-        "usage: packet_rays MESH.obj PREFIX camera8|camera1|shadow8|shadow1|incoherent1 [PASSES] [EVERY]";
+        "usage: packet_rays MESH.obj PREFIX camera8|camera1|camera1u|shadow8|shadow1|incoherent1 [PASSES] [EVERY]";
     let arg = |i: usize| args.get(i).ok_or(usage);
     let num = |i: usize, d: usize| args.get(i).map_or(Ok(d), |s| s.parse().map_err(|_| usage));
     let (kind, passes, every) = (arg(3)?.as_str(), num(4, 3)?, num(5, 1)?.max(1));
@@ -83,7 +85,15 @@ fn main() -> Result<(), String> {
                         tsum += f64::from(h.t);
                     }
                 }
-                "camera1" | "incoherent1" => {
+                "camera1" => {
+                    for r in p {
+                        if let Some(h) = scene.intersect_coherent(&r.ray, r.tmin, r.tmax) {
+                            hits += 1;
+                            tsum += f64::from(h.t);
+                        }
+                    }
+                }
+                "camera1u" | "incoherent1" => {
                     for r in p {
                         if let Some(h) = scene.intersect(&r.ray, r.tmin, r.tmax) {
                             hits += 1;

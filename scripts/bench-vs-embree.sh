@@ -9,7 +9,9 @@
 # count (1 and 2), so both see the same machine load; both report the best of 3 passes after a
 # warm-up and the best of 5 builds. Ratios: throughput glint/Embree (>1: glint faster), build time glint/Embree MEDIUM (<1:
 # glint faster), both against Embree's default MEDIUM build and single-ray queries (rtcIntersect1 /
-# rtcOccluded1). A second table compares glint's packets (`Bvh8` packets of 8: the camera rays in 4x2
+# rtcOccluded1). glint traces the camera rays with its coherent hint (MeshScene::intersect_coherent,
+# the walk per octant); the column "primary without the hint" is the same rays through
+# MeshScene::intersect. A second table compares glint's packets (`Bvh8` packets of 8: the camera rays in 4x2
 # tiles, the shadow rays eight consecutive ones) with Embree's single rays and its packets
 # (rtcIntersect8/rtcOccluded8 fed the same way); their checksums count in the checksums column.
 # Raw outputs are kept in WORKDIR/compare/.
@@ -71,8 +73,8 @@ def embree(path):
 def close(a, b):  # the criterion: within 0.1%
     return abs(a - b) <= 1e-3 * max(abs(a), abs(b), 1e-30)
 packets = {}
-print("| mesh | threads | primary | incoherent | shadow | build (glint/Embree MEDIUM) | glint build ms | Embree build ms | bytes/triangle | checksums |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+print("| mesh | threads | primary | primary without the hint | incoherent | shadow | build (glint/Embree MEDIUM) | glint build ms | Embree build ms | bytes/triangle | checksums |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for m in meshes:
     for t in threads:
         rows = []
@@ -97,18 +99,22 @@ for m in meshes:
                     "gp": gp["mrays"] / g["primary"]["mrays"], "gs": gs["mrays"] / g["shadow"]["mrays"],
                     "ep": e["primary8"] / e["primary"]["mrays"], "es": e["shadow8"] / e["shadow"]["mrays"],
                 })
+            gu = g.get("primary_unhinted")
+            if gu:
+                ok &= close(gu["hits"], e["primary"]["hits"]) and close(gu["tsum"], e["primary"]["tsum"])
             rows.append({
                 "primary": g["primary"]["mrays"] / e["primary"]["mrays"],
+                "unhinted": (gu or {"mrays": float("nan")})["mrays"] / e["primary"]["mrays"],
                 "incoherent": g["incoherent"]["mrays"] / e["incoherent"]["mrays"],
                 "shadow": g["shadow"]["mrays"] / e["shadow"]["mrays"],
                 "build": g["build_ms"] / e["build_ms"],
                 "gb": g["build_ms"], "eb": e["build_ms"], "bytes": g["bytes_per_triangle"],
             })
         if not rows:
-            print(f"| {m} | {t} | not measured | | | | | | | |")
+            print(f"| {m} | {t} | not measured | | | | | | | | |")
             continue
         med = {k: statistics.median(r[k] for r in rows) for k in rows[0]}
-        print(f"| {m} | {t} ({len(rows)} rep.) | {med['primary']:.2f} | {med['incoherent']:.2f} | {med['shadow']:.2f} | "
+        print(f"| {m} | {t} ({len(rows)} rep.) | {med['primary']:.2f} | {med['unhinted']:.2f} | {med['incoherent']:.2f} | {med['shadow']:.2f} | "
               f"{med['build']:.2f} | {med['gb']:.0f} | {med['eb']:.0f} | {med['bytes']:.1f} | "
               f"{'within 0.1%' if ok else 'DIFFER'} |")
 print(f"\nratios: medians over the repetitions shown (of {reps} planned); throughput ratios > 1 and build ratios < 1 favour glint")

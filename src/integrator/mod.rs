@@ -59,12 +59,19 @@ pub struct Trace<'a, 's, O> {
 
 impl<O: RayObserver> Trace<'_, '_, O> {
     /// The closest hit of `ray` beyond `tmin`, the ray counted and shown to
-    /// the observer as one at branch `b`.
+    /// the observer as one at branch `b`. A camera ray (kind
+    /// [`RayKind::Primary`]) is traced as one of a coherent run
+    /// (`World::intersect_coherent`): the render loop traces a tile's
+    /// camera rays one after another, and they keep their direction's
+    /// signs from one to the next.
     #[inline]
     pub fn closest(&mut self, ray: &Ray, tmin: f32, b: Branch) -> Option<Hit> {
-        let hit = self
-            .world
-            .intersect(ray, tmin, f32::INFINITY, self.counters);
+        let (w, c) = (self.world, &mut *self.counters);
+        let hit = if b.kind == RayKind::Primary {
+            w.intersect_coherent(ray, tmin, f32::INFINITY, c)
+        } else {
+            w.intersect(ray, tmin, f32::INFINITY, c)
+        };
         self.seen(ray, hit.as_ref(), b);
         hit
     }

@@ -199,6 +199,21 @@ impl World {
         self.finish_hit(ray, tmin, tmax, best, c)
     }
 
+    /// [`intersect`](Self::intersect) of a ray from a coherent run (a
+    /// tile's camera rays traced one by one, see [`Query::coherent`]): the
+    /// same hit, found faster where the rays keep their direction's signs.
+    pub fn intersect_coherent(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        c: &mut Counters,
+    ) -> Option<Hit> {
+        let q = Query::new(&self.prims, ray, tmin, tmax).with_coherent(true);
+        let best = (self.accel).intersect_barycentric(q, c);
+        self.finish_hit(ray, tmin, tmax, best, c)
+    }
+
     /// Whether [`intersect_packet`](Self::intersect_packet) walks a
     /// packet's rays together: the aggregate is the wide BVH (`bvh8`, the
     /// default; its non-triangle items, spheres, moving or transformed

@@ -17,7 +17,7 @@
 
 use super::packet::{self, PacketRay};
 use super::traverse::{
-    self, BoxTest, Closest, Fallback, Portable, RayData, Tree, ANY_OCTANT, DEEP, SHALLOW,
+    self, BoxTest, Closest, Fallback, Portable, RayData, Tree, ANY_OCTANT, BY_OCTANT, DEEP, SHALLOW,
 };
 use crate::accel::{PrimHit, Query};
 use crate::stats::TraversalStats;
@@ -118,9 +118,44 @@ impl FromClosest for (PrimHit, Option<[f32; 3]>) {
     }
 }
 
+/// `$walk` with `O` the ray's octant as a constant: one copy of the walk per
+/// octant, so that the node step loads each of its six planes from a fixed
+/// offset in the node (no index reloaded per plane from the stack, where
+/// register pressure puts it).
+///
+/// The any-hit walk takes it always; the closest-hit walk where the query
+/// says its ray is coherent ([`Query::coherent`]). Measured (Intel Xeon,
+/// 2 cores): the octant copies took 6.1% fewer instructions an any-hit
+/// query and 6.6% a closest one (callgrind, every 16th bunny40k ray);
+/// timed, shadow rays ran 4-8% faster and coherent camera rays 2-3%, but
+/// incoherent closest-hit rays, which switch octant from ray to ray, 4-13%
+/// slower: the jump to the octant's copy mispredicts. An AO render
+/// (incoherent any-hit rays) kept its time within 1%.
+macro_rules! by_octant {
+    ($rd:expr, |O| $walk:expr) => {
+        by_octant!(@ $rd, $walk, [0 1 2 3 4 5 6] 7)
+    };
+    (@ $rd:expr, $walk:expr, [$($o:literal)*] $last:literal) => {
+        match $rd.octant() {
+            $($o => {
+                const O: usize = $o;
+                $walk
+            })*
+            _ => {
+                const O: usize = $last;
+                $walk
+            }
+        }
+    };
+}
+
 /// The closest hit of one ray in `(tmin, tmax)` (see `traverse::closest`),
-/// as an `H` ([`FromClosest`]).
-pub(crate) struct ClosestHit<'a, F: ?Sized, S, H = Closest> {
+/// as an `H` ([`FromClosest`]). With `C`, the walk of a coherent query
+/// ([`Query::coherent`]: each descent by the ray's octant, see
+/// [`BY_OCTANT`]); a type of its own, so that its copy of the walk is a
+/// function of its own too: in one function with the usual walk, the
+/// usual walk's code changed and ran 3% slower (`glint bench rays`).
+pub(crate) struct ClosestHit<'a, F: ?Sized, S, H = Closest, const C: bool = false> {
     pub tree: Tree<'a, F>,
     /// The ray and its range (the query's `prims` are unused: the tree's
     /// fallback tests the items that are not triangles). By reference, not
@@ -134,7 +169,9 @@ pub(crate) struct ClosestHit<'a, F: ?Sized, S, H = Closest> {
     pub hit: PhantomData<H>,
 }
 
-impl<F: Fallback + ?Sized, S: TraversalStats, H: FromClosest> Walk for ClosestHit<'_, F, S, H> {
+impl<F: Fallback + ?Sized, S: TraversalStats, H: FromClosest, const C: bool> Walk
+    for ClosestHit<'_, F, S, H, C>
+{
     type Out = Option<H>;
 
     /// The ray's constants, then the stack the tree's depth needs.
@@ -147,6 +184,9 @@ impl<F: Fallback + ?Sized, S: TraversalStats, H: FromClosest> Walk for ClosestHi
         let rd = &RayData::new(q.ray);
         let (tmin, tmax, stats) = (q.tmin, q.tmax, &mut *self.stats);
         let hit = match (t.deep, rd.reduce_as_ints(tmin)) {
+            (false, true) if C => {
+                traverse::closest::<S, F, _, SHALLOW, BY_OCTANT, true>(bt, t, rd, tmin, tmax, stats)
+            }
             (false, true) => traverse::closest::<S, F, _, SHALLOW, ANY_OCTANT, true>(
                 bt, t, rd, tmin, tmax, stats,
             ),
@@ -172,35 +212,6 @@ pub(crate) struct AnyHit<'a, F: ?Sized, S> {
     pub query: &'a Query<'a>,
     pub skip: u32,
     pub stats: &'a mut S,
-}
-
-/// `$walk` with `O` the ray's octant as a constant: one copy of the walk per
-/// octant, so that the node step loads each of its six planes from a fixed
-/// offset in the node (no index reloaded per plane from the stack, where
-/// register pressure puts it).
-///
-/// Used for the any-hit walk only. Measured (Intel Xeon, 2 cores): the
-/// octant copies took 6.1% fewer instructions an any-hit query and 6.6% a
-/// closest one (callgrind, every 16th bunny40k ray); timed, shadow rays ran
-/// 4-8% faster and coherent camera rays 2-3%, but incoherent closest-hit
-/// rays, which switch octant from ray to ray, 4-13% slower. An AO render
-/// (incoherent any-hit rays) kept its time within 1%.
-macro_rules! by_octant {
-    ($rd:expr, |O| $walk:expr) => {
-        by_octant!(@ $rd, $walk, [0 1 2 3 4 5 6] 7)
-    };
-    (@ $rd:expr, $walk:expr, [$($o:literal)*] $last:literal) => {
-        match $rd.octant() {
-            $($o => {
-                const O: usize = $o;
-                $walk
-            })*
-            _ => {
-                const O: usize = $last;
-                $walk
-            }
-        }
-    };
 }
 
 impl<F: Fallback + ?Sized, S: TraversalStats> Walk for AnyHit<'_, F, S> {

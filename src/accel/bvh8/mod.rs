@@ -201,6 +201,21 @@ impl Bvh8 {
             .map(|h| (h.t, h.id))
     }
 
+    /// [`closest`](Self::closest) of a ray from a coherent run (see
+    /// [`Query::coherent`]): the same hit.
+    #[inline]
+    pub fn closest_coherent<S: TraversalStats, F: Fallback + ?Sized>(
+        &self,
+        fallback: &F,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        stats: &mut S,
+    ) -> Option<(f32, u32)> {
+        let q = Query::new(&[], ray, tmin, tmax).with_coherent(true);
+        (self.closest_query::<S, F, traverse::Closest>(fallback, &q, stats)).map(|h| (h.t, h.id))
+    }
+
     /// [`closest`](Self::closest) with a triangle hit's barycentrics.
     #[inline]
     pub(crate) fn closest_hit<S: TraversalStats, F: Fallback + ?Sized>(
@@ -225,7 +240,15 @@ impl Bvh8 {
     ) -> Option<H> {
         let tree = self.tree(fallback);
         let hit = PhantomData;
-        dispatch::run(ClosestHit {
+        if query.coherent {
+            return dispatch::run(ClosestHit::<_, _, _, true> {
+                tree,
+                query,
+                stats,
+                hit,
+            });
+        }
+        dispatch::run(ClosestHit::<_, _, _, false> {
             tree,
             query,
             stats,

@@ -426,6 +426,58 @@ fn queries_off_the_integer_path_agree_with_brute_force() {
     crate::accel::testutil::assert_agrees_on(&b, &prims, queries);
 }
 
+/// A coherent query (each descent by the ray's octant) returns the usual
+/// walk's hit and barycentrics, bit for bit, and visits the same nodes and
+/// tests the same triangles: on rays of every octant in random order, and
+/// on a fan of camera rays in scan order, on both the dispatched and the
+/// portable copy.
+#[test]
+fn the_coherent_walk_is_the_usual_walk() {
+    let prims = soup(17, 4000);
+    let b = Bvh8::new(&prims, all(&prims));
+    assert!(!b.deep);
+    let mut r = crate::accel::testutil::Rng::new(8);
+    let mut rays: Vec<Ray> = (0..1500)
+        .map(|_| crate::accel::testutil::ray(&mut r))
+        .collect();
+    for y in 0..40 {
+        for x in 0..40 {
+            let d = Vec3::new(x as f32 / 20.0 - 1.0, y as f32 / 20.0 - 1.0, 1.0);
+            rays.push(Ray::new(Vec3::new(0.1, -0.2, -6.0), d));
+        }
+    }
+    let octants: std::collections::HashSet<usize> = rays
+        .iter()
+        .map(|q| traverse::RayData::new(q).octant())
+        .collect();
+    assert_eq!(octants.len(), 8);
+    let tree = b.tree(&prims[..]);
+    let (mut hits, mut c1, mut c2) = (0, Counters::default(), Counters::default());
+    for q in &rays {
+        for tmax in [f32::INFINITY, 0.7] {
+            let query = &Query::new(&prims, q, 0.0, tmax);
+            let plain = dispatch::run(ClosestHit::<_, _, traverse::Closest, false> {
+                tree,
+                query,
+                stats: &mut c1,
+                hit: PhantomData,
+            });
+            let coherent = |stats| ClosestHit::<_, _, traverse::Closest, true> {
+                tree,
+                query,
+                stats,
+                hit: PhantomData,
+            };
+            assert_eq!(dispatch::run(coherent(&mut c2)), plain, "{q:?}");
+            let mut c3 = Counters::default();
+            assert_eq!(dispatch::run_portable(coherent(&mut c3)), plain, "{q:?}");
+            hits += usize::from(plain.is_some());
+        }
+    }
+    assert_eq!(format!("{c1:?}"), format!("{c2:?}"));
+    assert!((500..5500).contains(&hits), "{hits}");
+}
+
 #[test]
 fn both_stack_sizes_agree() {
     let prims = soup(9, 3000);

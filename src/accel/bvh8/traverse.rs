@@ -205,6 +205,12 @@ pub(crate) type Slot<T> = std::mem::MaybeUninit<T>;
 /// planes from [`RayData`] at run time (`0..8` fixes them at compile time).
 pub(crate) const ANY_OCTANT: usize = 8;
 
+/// The octant parameter of [`closest`] that walks each descent (the node
+/// steps from a popped child down to a leaf) with the copy of the node loop
+/// for the ray's octant, picked at run time: for coherent rays (see
+/// `Query::coherent`), whose octant the jump's predictor has seen before.
+pub(crate) const BY_OCTANT: usize = 9;
+
 /// What a ray needs at leaves: the watertight test's permutation and shear,
 /// and the same splatted for the four-lane pre-test. Made at the first leaf
 /// a ray reaches: many rays (shadow rays from the floor, camera rays past
@@ -923,19 +929,37 @@ pub(crate) fn closest<
         // bunny40k), for the same instructions a node step (the register
         // allocator still reloads the ray's splats from the stack at each
         // step); which of the two changes gives how much was not isolated.
-        while !is_leaf(cur) {
-            let node = tree.node::<S>(cur, &mut n_nodes);
-            let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(near.tmax));
-            cur = if mask == 0 {
-                match pop_nearer(&stack, &mut sp, near.tmax) {
-                    Some(c) => c,
+        if O == BY_OCTANT {
+            if !is_leaf(cur) {
+                let (s, tmax) = ((&mut stack[..], &mut sp), near.tmax);
+                macro_rules! down {
+                    ($($o:literal)*) => {
+                        match rd.octant() {
+                            $($o => descend::<S, F, B, $o, I>(bt, tree, rd, tmin4, tmax, cur, s, &mut n_nodes),)*
+                            _ => descend::<S, F, B, 7, I>(bt, tree, rd, tmin4, tmax, cur, s, &mut n_nodes),
+                        }
+                    };
+                }
+                match down!(0 1 2 3 4 5 6) {
+                    Some(c) => cur = c,
                     None => break 'walk near.best,
                 }
-            } else if mask & (mask - 1) == 0 {
-                node.child[mask.trailing_zeros() as usize]
-            } else {
-                order::<F, B, I>(bt, tree, node, mask, dist, &mut stack, &mut sp)
-            };
+            }
+        } else {
+            while !is_leaf(cur) {
+                let node = tree.node::<S>(cur, &mut n_nodes);
+                let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, Lanes::splat(near.tmax));
+                cur = if mask == 0 {
+                    match pop_nearer(&stack, &mut sp, near.tmax) {
+                        Some(c) => c,
+                        None => break 'walk near.best,
+                    }
+                } else if mask & (mask - 1) == 0 {
+                    node.child[mask.trailing_zeros() as usize]
+                } else {
+                    order::<F, B, I>(bt, tree, node, mask, dist, &mut stack, &mut sp)
+                };
+            }
         }
         if cur != EMPTY {
             let lr = &*leaf_ray.get_or_insert_with(|| LeafRay::new(&rd.ray));
@@ -948,6 +972,37 @@ pub(crate) fn closest<
     };
     stats.add(n_nodes, n_tests);
     best
+}
+
+/// The node steps of a closest-hit walk from `cur` down to a leaf (or
+/// [`EMPTY`]), pushing the other children hit; `None` when the ray leaves
+/// the tree without reaching another leaf nearer than `tmax`. `tmax` is
+/// the walk's current one: it changes only at leaves.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn descend<S: TraversalStats, F: Fallback + ?Sized, B: BoxTest, const O: usize, const I: bool>(
+    bt: B,
+    tree: &Tree<F>,
+    rd: &RayData,
+    tmin4: Lanes,
+    tmax: f32,
+    mut cur: u32,
+    (stack, sp): (&mut [Slot<(u32, f32)>], &mut usize),
+    n_nodes: &mut u64,
+) -> Option<u32> {
+    let tmax4 = Lanes::splat(tmax);
+    while !is_leaf(cur) {
+        let node = tree.node::<S>(cur, n_nodes);
+        let (mask, dist) = rd.boxes::<_, O, I>(bt, node, tmin4, tmax4);
+        cur = if mask == 0 {
+            pop_nearer(stack, sp, tmax)?
+        } else if mask & (mask - 1) == 0 {
+            node.child[mask.trailing_zeros() as usize]
+        } else {
+            order::<F, B, I>(bt, tree, node, mask, dist, stack, sp)
+        };
+    }
+    Some(cur)
 }
 
 /// Pops the nearest pending child of a closest-hit walk that can still hold

@@ -92,14 +92,32 @@ impl std::ops::Add for Sums {
 /// Rays handed to a thread at a time (as Embree's harness does).
 const CHUNK: usize = 4096;
 
-fn pass(scene: &MeshScene, rays: &[RayRec], shadow: bool) -> Sums {
+/// How a pass queries its rays one at a time.
+#[derive(Clone, Copy, PartialEq)]
+enum Query {
+    /// Closest hits, with the coherent hint (`MeshScene::intersect_coherent`):
+    /// the camera rays, traced row by row.
+    Coherent,
+    /// Closest hits without the hint (`MeshScene::intersect`).
+    Closest,
+    /// Any hit (`MeshScene::occluded`).
+    Shadow,
+}
+
+fn pass(scene: &MeshScene, rays: &[RayRec], query: Query) -> Sums {
     rays.par_chunks(CHUNK)
         .map(|chunk| {
             let mut s = Sums::default();
             for r in chunk {
-                if shadow {
-                    s.hits += u64::from(scene.occluded(&r.ray, r.tmin, r.tmax));
-                } else if let Some(h) = scene.intersect(&r.ray, r.tmin, r.tmax) {
+                let hit = match query {
+                    Query::Shadow => {
+                        s.hits += u64::from(scene.occluded(&r.ray, r.tmin, r.tmax));
+                        continue;
+                    }
+                    Query::Coherent => scene.intersect_coherent(&r.ray, r.tmin, r.tmax),
+                    Query::Closest => scene.intersect(&r.ray, r.tmin, r.tmax),
+                };
+                if let Some(h) = hit {
                     s.hits += 1;
                     s.tsum += f64::from(h.t);
                 }
@@ -198,10 +216,10 @@ fn measure_packets<P: AsRef<[PacketRay]> + Sync>(
 }
 
 /// Warm-up, then the best of three: Mrays/s and the checksums.
-fn measure(scene: &MeshScene, rays: &[RayRec], shadow: bool) -> (f64, Sums) {
-    let sums = pass(scene, rays, shadow);
+fn measure(scene: &MeshScene, rays: &[RayRec], query: Query) -> (f64, Sums) {
+    let sums = pass(scene, rays, query);
     let best = best_of_three(|| {
-        pass(scene, rays, shadow);
+        pass(scene, rays, query);
     });
     (rays.len() as f64 / best / 1e6, sums)
 }
@@ -248,9 +266,10 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
     let scene = scene.expect("built five times");
     let tris = scene.triangle_count();
     let bytes = scene.memory_bytes() as f64 / tris.max(1) as f64;
-    let (mp, p) = measure(&scene, &primary, false);
-    let (mi, i) = measure(&scene, &incoherent, false);
-    let (ms, s) = measure(&scene, &shadow, true);
+    let (mp, p) = measure(&scene, &primary, Query::Coherent);
+    let (mg, g) = measure(&scene, &primary, Query::Closest);
+    let (mi, i) = measure(&scene, &incoherent, Query::Closest);
+    let (ms, s) = measure(&scene, &shadow, Query::Shadow);
     let tiles = camera_tiles(&primary);
     let (mp8, p8) = match &tiles {
         Some(t) => measure_packets(&scene, t, false),
@@ -259,17 +278,23 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
     let (ms8, s8) = measure_packets(&scene, &consecutive(&shadow), true);
     let threads = rayon::current_num_threads();
     if a.stats {
-        for (name, rays, shadow) in [
-            ("primary", &primary, false),
-            ("incoherent", &incoherent, false),
-            ("shadow", &shadow, true),
+        for (name, rays, query) in [
+            ("primary", &primary, Query::Coherent),
+            ("incoherent", &incoherent, Query::Closest),
+            ("shadow", &shadow, Query::Shadow),
         ] {
             let mut c = glint::stats::Counters::default();
             for r in rays.iter() {
-                if shadow {
-                    scene.occluded_with(&r.ray, r.tmin, r.tmax, &mut c);
-                } else {
-                    scene.intersect_with(&r.ray, r.tmin, r.tmax, &mut c);
+                match query {
+                    Query::Shadow => {
+                        scene.occluded_with(&r.ray, r.tmin, r.tmax, &mut c);
+                    }
+                    Query::Coherent => {
+                        scene.intersect_coherent_with(&r.ray, r.tmin, r.tmax, &mut c);
+                    }
+                    Query::Closest => {
+                        scene.intersect_with(&r.ray, r.tmin, r.tmax, &mut c);
+                    }
                 }
             }
             let n = rays.len().max(1) as f64;
@@ -308,6 +333,7 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
             "build_ms": build_ms,
             "bytes_per_triangle": bytes,
             "primary": {"mrays": mp, "hits": p.hits, "tsum": p.tsum},
+            "primary_unhinted": {"mrays": mg, "hits": g.hits, "tsum": g.tsum},
             "incoherent": {"mrays": mi, "hits": i.hits, "tsum": i.tsum},
             "shadow": {"mrays": ms, "occluded": s.hits},
             "primary_packets": {"mrays": mp8, "hits": p8.hits, "tsum": p8.tsum},
@@ -325,6 +351,10 @@ fn run_in_pool(a: &RaysArgs) -> Result<(), String> {
         println!(
             "  primary    {mp:8.2} Mrays/s  hits={} tsum={:.6}",
             p.hits, p.tsum
+        );
+        println!(
+            "  primary, without the coherent hint {mg:8.2} Mrays/s  hits={} tsum={:.6}",
+            g.hits, g.tsum
         );
         println!(
             "  incoherent {mi:8.2} Mrays/s  hits={} tsum={:.6}",
