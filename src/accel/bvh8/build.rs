@@ -61,8 +61,23 @@ const BINS: usize = 32;
 /// sphere1m and 1.12x on sphere4m, camera and shadow rays 0.995-1.03x;
 /// 2.0 more on sphere1m's incoherent rays (1.17x) but bunny40k's shadow
 /// rays 0.97x. Builds of up to [`WIDE_ITEMS`] items (scenes: a room, rows
-/// of spheres) keep [`SMALL_SPLIT_COST`].
+/// of spheres) keep [`SMALL_SPLIT_COST`], builds of more than
+/// [`LARGE_ITEMS`] take [`LARGE_SPLIT_COST`].
 const SPLIT_COST: f32 = 1.5;
+/// [`SPLIT_COST`] of builds of more than [`LARGE_ITEMS`] items, whose
+/// trees are far larger than the caches: there a node level is one more
+/// load from memory a ray waits for, while a larger leaf's blocks are
+/// asked for at once (`Tree::nearest_in_leaf`). Measured against 1.5
+/// (`examples/packet_rays`, 1 thread pinned, medians of 3-5 alternated
+/// runs): incoherent rays 1.05x on sphere4m and 1.03x on sphere1m, camera
+/// rays 1.01x on both, shadow rays 0.99x; 3.0 gave 1.04x, 1.02x, 1.01x and
+/// 0.99-1.01x. bunny40k (40k items) keeps 1.5: 2.0 cost its shadow rays
+/// 3%.
+const LARGE_SPLIT_COST: f32 = 2.0;
+/// The builds of more items than this take [`LARGE_SPLIT_COST`]: a
+/// quarter million triangles, some 13 MB of nodes and blocks, past what a
+/// core's caches hold of a tree a ray walks at random.
+const LARGE_ITEMS: usize = 1 << 18;
 /// [`SPLIT_COST`] of builds of up to [`WIDE_ITEMS`] items. Their items are
 /// often not triangles (spheres, planes), each tested alone however the
 /// SAH groups them in blocks of four, and their trees fit in the cache:
@@ -238,11 +253,7 @@ pub(crate) fn build<S: Source>(src: &S) -> Built {
             depth: 0,
         };
     }
-    let builder = Builder {
-        pad: Vec3::splat(margin(&bounds)),
-        wide: refs.len() <= WIDE_ITEMS,
-        deepest: AtomicUsize::new(0),
-    };
+    let builder = Builder::new(refs.len(), margin(&bounds));
     let all = Range {
         begin: 0,
         end: refs.len(),
@@ -695,17 +706,32 @@ struct Builder {
     pad: Vec3,
     /// Whether small ranges may become wide nodes ([`WIDE_ITEMS`]).
     wide: bool,
+    /// Whether the build is of more than [`LARGE_ITEMS`] items.
+    large: bool,
     /// The deepest node level built so far (see [`depth`]).
     deepest: AtomicUsize,
 }
 
 impl Builder {
+    /// The builder of `n` items, whose boxes are padded by `pad`.
+    fn new(n: usize, pad: f32) -> Builder {
+        Builder {
+            pad: Vec3::splat(pad),
+            wide: n <= WIDE_ITEMS,
+            large: n > LARGE_ITEMS,
+            deepest: AtomicUsize::new(0),
+        }
+    }
+
     /// The SAH's cost of a binary division relative to a block's test:
-    /// [`SPLIT_COST`], or [`SMALL_SPLIT_COST`] in builds of up to
-    /// [`WIDE_ITEMS`] items.
+    /// [`SPLIT_COST`], [`SMALL_SPLIT_COST`] in builds of up to
+    /// [`WIDE_ITEMS`] items and [`LARGE_SPLIT_COST`] in builds of more
+    /// than [`LARGE_ITEMS`].
     fn split_cost(&self) -> f32 {
         if self.wide {
             SMALL_SPLIT_COST
+        } else if self.large {
+            LARGE_SPLIT_COST
         } else {
             SPLIT_COST
         }

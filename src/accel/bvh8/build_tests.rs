@@ -18,6 +18,7 @@ fn builder() -> Builder {
     Builder {
         pad: Vec3::ZERO,
         wide: true,
+        large: false,
         deepest: AtomicUsize::new(0),
     }
 }
@@ -648,4 +649,16 @@ fn divide_small_makes_the_sides_of_divide() {
         }
     }
     assert!(cuts > 1000, "{cuts}");
+}
+
+/// The split cost follows the build's size: scenes' builds of up to
+/// `WIDE_ITEMS` items, meshes' of more than `LARGE_ITEMS`, the rest.
+#[test]
+fn the_split_cost_follows_the_build_size() {
+    let cost = |n| Builder::new(n, 0.0).split_cost();
+    assert_eq!(cost(1), SMALL_SPLIT_COST);
+    assert_eq!(cost(WIDE_ITEMS), SMALL_SPLIT_COST);
+    assert_eq!(cost(WIDE_ITEMS + 1), SPLIT_COST);
+    assert_eq!(cost(LARGE_ITEMS), SPLIT_COST);
+    assert_eq!(cost(LARGE_ITEMS + 1), LARGE_SPLIT_COST);
 }
