@@ -62,7 +62,8 @@ const BINS: usize = 32;
 /// 2.0 more on sphere1m's incoherent rays (1.17x) but bunny40k's shadow
 /// rays 0.97x. Builds of up to [`WIDE_ITEMS`] items (scenes: a room, rows
 /// of spheres) keep [`SMALL_SPLIT_COST`], builds of more than
-/// [`LARGE_ITEMS`] take [`LARGE_SPLIT_COST`].
+/// [`LARGE_ITEMS`] take [`LARGE_SPLIT_COST`] and of more than
+/// [`HUGE_ITEMS`] [`HUGE_SPLIT_COST`].
 const SPLIT_COST: f32 = 1.5;
 /// [`SPLIT_COST`] of builds of more than [`LARGE_ITEMS`] items, whose
 /// trees are far larger than the caches: there a node level is one more
@@ -78,6 +79,22 @@ const LARGE_SPLIT_COST: f32 = 2.0;
 /// quarter million triangles, some 13 MB of nodes and blocks, past what a
 /// core's caches hold of a tree a ray walks at random.
 const LARGE_ITEMS: usize = 1 << 18;
+/// [`SPLIT_COST`] of builds of more than [`HUGE_ITEMS`] items, with leaves
+/// of up to [`MAX_LEAF_ITEMS`] (eight blocks) instead of [`LEAF_ITEMS`]:
+/// larger leaves still, where even the tree's lower node levels miss
+/// every cache. Measured on sphere4m (4.2M items) against
+/// [`LARGE_SPLIT_COST`] with four-block leaves (`examples/packet_rays`, 1
+/// thread pinned, 3-5 alternated runs): incoherent rays 1.08x (3.0:
+/// 1.05x, 5.0: 1.08x), camera rays 0.99x, shadow rays 0.975x. On sphere1m
+/// (1.05M items, which stays at [`LARGE_SPLIT_COST`]) the same cost gave
+/// incoherent rays 1.055x but camera rays 0.97x and shadow rays 0.91x.
+const HUGE_SPLIT_COST: f32 = 4.0;
+/// The builds of more items than this take [`HUGE_SPLIT_COST`]: two
+/// million triangles, a tree of some 100 MB.
+const HUGE_ITEMS: usize = 1 << 21;
+/// Most items a leaf holds in builds of up to [`HUGE_ITEMS`] items (four
+/// blocks), and where a range's centroids coincide.
+const LEAF_ITEMS: usize = 16;
 /// [`SPLIT_COST`] of builds of up to [`WIDE_ITEMS`] items. Their items are
 /// often not triangles (spheres, planes), each tested alone however the
 /// SAH groups them in blocks of four, and their trees fit in the cache:
@@ -581,7 +598,7 @@ fn forced(r: &Range, depth: usize) -> Option<Option<Plan>> {
     let axis = longest(ce);
     if ce[axis] <= 0.0 {
         // Coincident centroids: no plane separates them.
-        return Some((n > MAX_LEAF_ITEMS).then_some(Plan::Median { axis: axis as u8 }));
+        return Some((n > LEAF_ITEMS).then_some(Plan::Median { axis: axis as u8 }));
     }
     if depth + levels_left(n) >= MAX_DEPTH {
         return Some(Some(Plan::Median { axis: axis as u8 }));
@@ -708,6 +725,8 @@ struct Builder {
     wide: bool,
     /// Whether the build is of more than [`LARGE_ITEMS`] items.
     large: bool,
+    /// Whether the build is of more than [`HUGE_ITEMS`] items.
+    huge: bool,
     /// The deepest node level built so far (see [`depth`]).
     deepest: AtomicUsize,
 }
@@ -719,17 +738,30 @@ impl Builder {
             pad: Vec3::splat(pad),
             wide: n <= WIDE_ITEMS,
             large: n > LARGE_ITEMS,
+            huge: n > HUGE_ITEMS,
             deepest: AtomicUsize::new(0),
+        }
+    }
+
+    /// Most items a leaf holds: [`MAX_LEAF_ITEMS`] in builds of more than
+    /// [`HUGE_ITEMS`] items, else [`LEAF_ITEMS`].
+    fn leaf_items(&self) -> usize {
+        if self.huge {
+            MAX_LEAF_ITEMS
+        } else {
+            LEAF_ITEMS
         }
     }
 
     /// The SAH's cost of a binary division relative to a block's test:
     /// [`SPLIT_COST`], [`SMALL_SPLIT_COST`] in builds of up to
-    /// [`WIDE_ITEMS`] items and [`LARGE_SPLIT_COST`] in builds of more
-    /// than [`LARGE_ITEMS`].
+    /// [`WIDE_ITEMS`] items, [`LARGE_SPLIT_COST`] in builds of more than
+    /// [`LARGE_ITEMS`] and [`HUGE_SPLIT_COST`] of more than [`HUGE_ITEMS`].
     fn split_cost(&self) -> f32 {
         if self.wide {
             SMALL_SPLIT_COST
+        } else if self.huge {
+            HUGE_SPLIT_COST
         } else if self.large {
             LARGE_SPLIT_COST
         } else {
@@ -780,7 +812,7 @@ impl Builder {
             bins: if n < SMALL_RANGE { SMALL_BINS } else { BINS } as u8,
             wide,
         };
-        if n <= MAX_LEAF_ITEMS && whole * blocks(n) <= split {
+        if n <= self.leaf_items() && whole * blocks(n) <= split {
             // The binary SAH charges each binary level a node test and
             // sees only two children: it cannot see that the items of a
             // room (each plane leaves one side with the whole room's box)

@@ -19,6 +19,7 @@ fn builder() -> Builder {
         pad: Vec3::ZERO,
         wide: true,
         large: false,
+        huge: false,
         deepest: AtomicUsize::new(0),
     }
 }
@@ -136,10 +137,10 @@ fn the_plan_stops_at_leaves_and_falls_back_to_the_median() {
         0
     )
     .is_none());
-    for n in [5, MAX_LEAF_ITEMS] {
+    for n in [5, LEAF_ITEMS] {
         assert!(plan(&pile(n), 0).is_none(), "{n}");
     }
-    for n in [MAX_LEAF_ITEMS + 1, 100] {
+    for n in [LEAF_ITEMS + 1, 100] {
         assert!(
             matches!(plan(&pile(n), 0), Some(Plan::Median { .. })),
             "{n}"
@@ -651,8 +652,9 @@ fn divide_small_makes_the_sides_of_divide() {
     assert!(cuts > 1000, "{cuts}");
 }
 
-/// The split cost follows the build's size: scenes' builds of up to
-/// `WIDE_ITEMS` items, meshes' of more than `LARGE_ITEMS`, the rest.
+/// The split cost and the leaves' size follow the build's size: scenes'
+/// builds of up to `WIDE_ITEMS` items, meshes' of more than `LARGE_ITEMS`
+/// and of more than `HUGE_ITEMS`, the rest.
 #[test]
 fn the_split_cost_follows_the_build_size() {
     let cost = |n| Builder::new(n, 0.0).split_cost();
@@ -661,4 +663,11 @@ fn the_split_cost_follows_the_build_size() {
     assert_eq!(cost(WIDE_ITEMS + 1), SPLIT_COST);
     assert_eq!(cost(LARGE_ITEMS), SPLIT_COST);
     assert_eq!(cost(LARGE_ITEMS + 1), LARGE_SPLIT_COST);
+    assert_eq!(cost(HUGE_ITEMS), LARGE_SPLIT_COST);
+    assert_eq!(cost(HUGE_ITEMS + 1), HUGE_SPLIT_COST);
+    let leaf = |n| Builder::new(n, 0.0).leaf_items();
+    assert_eq!(
+        (leaf(HUGE_ITEMS), leaf(HUGE_ITEMS + 1)),
+        (LEAF_ITEMS, MAX_LEAF_ITEMS)
+    );
 }
