@@ -113,11 +113,11 @@ impl MeshScene {
     /// [`intersect`](Self::intersect) of a ray from a coherent run: rays
     /// traced one after another whose directions mostly keep their signs
     /// from one to the next (camera rays in scan order). The same hit, bit
-    /// for bit, from a copy of the walk compiled for the ray's octant: its
-    /// node step loads each plane from a fixed offset. Faster for such
-    /// runs, slower where the octant changes from ray to ray (the jump to
-    /// the octant's copy mispredicts); `docs/performance.md` has the
-    /// numbers.
+    /// for bit, from a walk whose descents run a copy of the node loop
+    /// compiled for the ray's octant (each plane loaded from a fixed
+    /// offset in the node). Faster for such runs, slower where the octant
+    /// changes from ray to ray (the jump to the octant's copy
+    /// mispredicts); `docs/performance.md` has the numbers.
     #[inline]
     pub fn intersect_coherent(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<MeshHit> {
         self.intersect_coherent_with(ray, tmin, tmax, &mut NoStats)

@@ -118,37 +118,6 @@ impl FromClosest for (PrimHit, Option<[f32; 3]>) {
     }
 }
 
-/// `$walk` with `O` the ray's octant as a constant: one copy of the walk per
-/// octant, so that the node step loads each of its six planes from a fixed
-/// offset in the node (no index reloaded per plane from the stack, where
-/// register pressure puts it).
-///
-/// The any-hit walk takes it always; the closest-hit walk where the query
-/// says its ray is coherent ([`Query::coherent`]). Measured (Intel Xeon,
-/// 2 cores): the octant copies took 6.1% fewer instructions an any-hit
-/// query and 6.6% a closest one (callgrind, every 16th bunny40k ray);
-/// timed, shadow rays ran 4-8% faster and coherent camera rays 2-3%, but
-/// incoherent closest-hit rays, which switch octant from ray to ray, 4-13%
-/// slower: the jump to the octant's copy mispredicts. An AO render
-/// (incoherent any-hit rays) kept its time within 1%.
-macro_rules! by_octant {
-    ($rd:expr, |O| $walk:expr) => {
-        by_octant!(@ $rd, $walk, [0 1 2 3 4 5 6] 7)
-    };
-    (@ $rd:expr, $walk:expr, [$($o:literal)*] $last:literal) => {
-        match $rd.octant() {
-            $($o => {
-                const O: usize = $o;
-                $walk
-            })*
-            _ => {
-                const O: usize = $last;
-                $walk
-            }
-        }
-    };
-}
-
 /// The closest hit of one ray in `(tmin, tmax)` (see `traverse::closest`),
 /// as an `H` ([`FromClosest`]). With `C`, the walk of a coherent query
 /// ([`Query::coherent`]: each descent by the ray's octant, see
@@ -212,6 +181,37 @@ pub(crate) struct AnyHit<'a, F: ?Sized, S> {
     pub query: &'a Query<'a>,
     pub skip: u32,
     pub stats: &'a mut S,
+}
+
+/// `$walk` with `O` the ray's octant as a constant: one copy of the walk per
+/// octant, so that the node step loads each of its six planes from a fixed
+/// offset in the node (no index reloaded per plane from the stack, where
+/// register pressure puts it).
+///
+/// Used for the any-hit walk only (a coherent closest-hit query picks its
+/// octant's copy per descent instead, see [`BY_OCTANT`]). Measured (Intel
+/// Xeon, 2 cores): the octant copies took 6.1% fewer instructions an
+/// any-hit query and 6.6% a closest one (callgrind, every 16th bunny40k
+/// ray); timed, shadow rays ran 4-8% faster and coherent camera rays 2-3%,
+/// but incoherent closest-hit rays, which switch octant from ray to ray,
+/// 4-13% slower. An AO render (incoherent any-hit rays) kept its time
+/// within 1%.
+macro_rules! by_octant {
+    ($rd:expr, |O| $walk:expr) => {
+        by_octant!(@ $rd, $walk, [0 1 2 3 4 5 6] 7)
+    };
+    (@ $rd:expr, $walk:expr, [$($o:literal)*] $last:literal) => {
+        match $rd.octant() {
+            $($o => {
+                const O: usize = $o;
+                $walk
+            })*
+            _ => {
+                const O: usize = $last;
+                $walk
+            }
+        }
+    };
 }
 
 impl<F: Fallback + ?Sized, S: TraversalStats> Walk for AnyHit<'_, F, S> {
