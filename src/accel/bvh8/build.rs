@@ -65,34 +65,39 @@ const BINS: usize = 32;
 /// [`LARGE_ITEMS`] take [`LARGE_SPLIT_COST`] and of more than
 /// [`HUGE_ITEMS`] [`HUGE_SPLIT_COST`].
 const SPLIT_COST: f32 = 1.5;
-/// [`SPLIT_COST`] of builds of more than [`LARGE_ITEMS`] items, whose
-/// trees are far larger than the caches: there a node level is one more
-/// load from memory a ray waits for, while a larger leaf's blocks are
-/// asked for at once (`Tree::nearest_in_leaf`). Measured against 1.5
-/// (`examples/packet_rays`, 1 thread pinned, medians of 3-5 alternated
-/// runs): incoherent rays 1.05x on sphere4m and 1.03x on sphere1m, camera
-/// rays 1.01x on both, shadow rays 0.99x; 3.0 gave 1.04x, 1.02x, 1.01x and
-/// 0.99-1.01x. bunny40k (40k items) keeps 1.5: 2.0 cost its shadow rays
-/// 3%.
-const LARGE_SPLIT_COST: f32 = 2.0;
+/// [`SPLIT_COST`] of builds of more than [`LARGE_ITEMS`] items, with
+/// leaves of up to [`MAX_LEAF_ITEMS`] (eight blocks) instead of
+/// [`LEAF_ITEMS`]. Their trees are far larger than the caches: there a
+/// node level is one more load from memory a ray waits for, while a larger
+/// leaf's blocks are asked for at once (`Tree::nearest_in_leaf`). 2.0 with
+/// four-block leaves, against 1.5 (`examples/packet_rays`, 1 thread
+/// pinned, medians of 3-5 alternated runs): incoherent rays 1.05x on
+/// sphere4m and 1.03x on sphere1m, camera rays 1.01x on both, shadow rays
+/// 0.99x. Then on sphere1m (1.05M items), 2.5 with eight-block leaves
+/// against 2.0 with four (`glint bench rays`, 1 thread pinned, four
+/// batches of 5-7 alternated runs, medians): incoherent rays 1.042x,
+/// 0.999x, 1.015x and 1.035x, camera rays 0.995-0.999x, shadow rays
+/// 0.985-0.993x; 3.0 read 1.066x and 1.016x, but camera rays 0.982-0.985x
+/// and shadow rays 0.970-0.975x. bunny40k (40k items) keeps 1.5: 2.0 cost
+/// its shadow rays 3%.
+const LARGE_SPLIT_COST: f32 = 2.5;
 /// The builds of more items than this take [`LARGE_SPLIT_COST`]: a
 /// quarter million triangles, some 13 MB of nodes and blocks, past what a
 /// core's caches hold of a tree a ray walks at random.
 const LARGE_ITEMS: usize = 1 << 18;
-/// [`SPLIT_COST`] of builds of more than [`HUGE_ITEMS`] items, with leaves
-/// of up to [`MAX_LEAF_ITEMS`] (eight blocks) instead of [`LEAF_ITEMS`]:
-/// larger leaves still, where even the tree's lower node levels miss
-/// every cache. Measured on sphere4m (4.2M items) against
-/// [`LARGE_SPLIT_COST`] with four-block leaves (`examples/packet_rays`, 1
-/// thread pinned, 3-5 alternated runs): incoherent rays 1.08x (3.0:
-/// 1.05x, 5.0: 1.08x), camera rays 0.99x, shadow rays 0.975x. On sphere1m
-/// (1.05M items, which stays at [`LARGE_SPLIT_COST`]) the same cost gave
-/// incoherent rays 1.055x but camera rays 0.97x and shadow rays 0.91x.
+/// [`SPLIT_COST`] of builds of more than [`HUGE_ITEMS`] items: larger
+/// leaves still, where even the tree's lower node levels miss every
+/// cache. Measured on sphere4m (4.2M items) against a split cost of 2.0
+/// with four-block leaves (`examples/packet_rays`, 1 thread pinned, 3-5
+/// alternated runs): incoherent rays 1.08x (3.0: 1.05x, 5.0: 1.08x),
+/// camera rays 0.99x, shadow rays 0.975x. On sphere1m (1.05M items, which
+/// stays at [`LARGE_SPLIT_COST`]) the same cost gave incoherent rays
+/// 1.055x but camera rays 0.97x and shadow rays 0.91x.
 const HUGE_SPLIT_COST: f32 = 4.0;
 /// The builds of more items than this take [`HUGE_SPLIT_COST`]: two
 /// million triangles, a tree of some 100 MB.
 const HUGE_ITEMS: usize = 1 << 21;
-/// Most items a leaf holds in builds of up to [`HUGE_ITEMS`] items (four
+/// Most items a leaf holds in builds of up to [`LARGE_ITEMS`] items (four
 /// blocks), and where a range's centroids coincide.
 const LEAF_ITEMS: usize = 16;
 /// [`SPLIT_COST`] of builds of up to [`WIDE_ITEMS`] items. Their items are
@@ -744,9 +749,9 @@ impl Builder {
     }
 
     /// Most items a leaf holds: [`MAX_LEAF_ITEMS`] in builds of more than
-    /// [`HUGE_ITEMS`] items, else [`LEAF_ITEMS`].
+    /// [`LARGE_ITEMS`] items, else [`LEAF_ITEMS`].
     fn leaf_items(&self) -> usize {
-        if self.huge {
+        if self.large {
             MAX_LEAF_ITEMS
         } else {
             LEAF_ITEMS

@@ -667,7 +667,11 @@ fn the_split_cost_follows_the_build_size() {
     assert_eq!(cost(HUGE_ITEMS + 1), HUGE_SPLIT_COST);
     let leaf = |n| Builder::new(n, 0.0).leaf_items();
     assert_eq!(
-        (leaf(HUGE_ITEMS), leaf(HUGE_ITEMS + 1)),
-        (LEAF_ITEMS, MAX_LEAF_ITEMS)
+        (
+            leaf(LARGE_ITEMS),
+            leaf(LARGE_ITEMS + 1),
+            leaf(HUGE_ITEMS + 1)
+        ),
+        (LEAF_ITEMS, MAX_LEAF_ITEMS, MAX_LEAF_ITEMS)
     );
 }

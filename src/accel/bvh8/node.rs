@@ -15,8 +15,8 @@ pub(crate) const LEAF: u32 = 1 << 31;
 pub(crate) const EMPTY: ChildRef = u32::MAX;
 /// Bits for a leaf's first block.
 pub(crate) const START_BITS: u32 = 28;
-/// Most items one leaf holds (eight blocks of four, in the builds of the
-/// largest meshes; others stop at four blocks, see `build::LEAF_ITEMS`;
+/// Most items one leaf holds (eight blocks of four, in the builds of
+/// large meshes; others stop at four blocks, see `build::LEAF_ITEMS`;
 /// the SAH decides below).
 pub(crate) const MAX_LEAF_ITEMS: usize = 32;
 const _: () = assert!(MAX_LEAF_ITEMS <= 4 * 8, "a leaf holds at most eight blocks");
