@@ -322,6 +322,75 @@ fn every_item_is_in_one_block_of_its_leaf() {
     );
 }
 
+/// A build of more than `build::LARGE_ITEMS` items (split cost 2.5 and
+/// leaves of up to eight blocks) makes leaves of more than four blocks,
+/// holds each item in one block, and agrees with brute force: a height
+/// field of 263,538 triangles, rays down onto it, rays of random direction
+/// from above it and bounded ones.
+#[test]
+fn a_large_build_agrees_with_brute_force() {
+    use crate::accel::testutil::{assert_agrees_on, prim, Rng};
+    use crate::shape::{Shape, Triangle};
+    use node::{is_leaf, leaf_range, EMPTY, NO_ITEM, OTHER};
+    let k = 363;
+    let y = |i: usize, j: usize| ((i as f32 * 0.05).sin() + (j as f32 * 0.07).cos()) * 3.0;
+    let v = |i: usize, j: usize| Vec3::new(i as f32 * 0.2, y(i, j), j as f32 * 0.2);
+    let mut prims = Vec::with_capacity(2 * k * k);
+    for i in 0..k {
+        for j in 0..k {
+            let (a, b, c, d) = (v(i, j), v(i + 1, j), v(i, j + 1), v(i + 1, j + 1));
+            prims.push(prim(Shape::Triangle(Triangle::new(a, b, d))));
+            prims.push(prim(Shape::Triangle(Triangle::new(a, d, c))));
+        }
+    }
+    assert!(prims.len() > 1 << 18, "{}", prims.len());
+    let b = Bvh8::new(&prims, all(&prims));
+    let mut seen = vec![0u8; prims.len()];
+    let mut widest = 0;
+    for n in &b.nodes {
+        for &c in n.child.iter().filter(|&&c| c != EMPTY && is_leaf(c)) {
+            let (first, blocks) = leaf_range(c);
+            widest = widest.max(blocks);
+            for t in &b.tris[first..first + blocks] {
+                for &id in t.ids.iter().filter(|&&id| id != NO_ITEM) {
+                    seen[(id & !OTHER) as usize] += 1;
+                }
+            }
+        }
+    }
+    assert!(widest > 4, "the widest leaf holds {widest} blocks");
+    assert!(
+        seen.iter().all(|&s| s == 1),
+        "an item in no block or in two"
+    );
+    let size = 0.2 * k as f32;
+    let mut r = Rng::new(29);
+    let queries: Vec<_> = (0..150)
+        .map(|i| {
+            let o = Vec3::new(size * r.f(), 4.0 + 4.0 * r.f(), size * r.f());
+            let dir = if i % 2 == 0 {
+                Vec3::new(size * r.f(), 0.0, size * r.f()) - o
+            } else {
+                r.v(-1.0, 1.0)
+            };
+            let (tmin, tmax) = if i % 3 == 0 {
+                (0.5, 20.0)
+            } else {
+                (0.0, f32::INFINITY)
+            };
+            (Ray::new(o, dir), tmin, tmax)
+        })
+        .collect();
+    let hits = queries
+        .iter()
+        .filter(|(ray, tmin, tmax)| {
+            let q = Query::new(&prims, ray, *tmin, *tmax);
+            b.intersect(q, &mut Counters::default()).is_some()
+        })
+        .count();
+    assert!(hits > 50, "{hits} of 150 rays hit");
+    assert_agrees_on(&b, &prims, queries);
+}
 #[test]
 fn nearest_first_visits_few_nodes() {
     let prims: Vec<Primitive> = (0..4096)
